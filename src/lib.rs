@@ -1,0 +1,7 @@
+//! vadscope: a viewer, labeling tool and HF²-VAD_AD runtime for video anomaly detection in
+//! autonomous driving.
+//!
+//! The library is GUI-free below `app`; see `ARCHITECTURE.md` for the module map and the
+//! one-way data flow.
+
+pub mod sequence;
