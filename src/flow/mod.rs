@@ -38,7 +38,7 @@ pub use colorize::{
 pub use dis::DisFlow;
 pub use error::FlowError;
 pub use metrics::{EndpointError, PixelBox, box_endpoint_error, crop_resize_flow, endpoint_error};
-pub use params::{DisParams, DisPreset};
+pub use params::{DisParams, DisPreset, SUPPORTED_PATCH_SIZES};
 pub use plane::FlowFrame;
 
 pub use crate::sequence::FlowField;

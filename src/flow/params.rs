@@ -68,11 +68,14 @@ impl std::str::FromStr for DisPreset {
     }
 }
 
+/// Patch sizes the search kernels are built for.
+pub const SUPPORTED_PATCH_SIZES: [u32; 4] = [4, 8, 12, 16];
+
 /// Every tunable of the DIS estimator. Build one with [`DisParams::from_preset`] and adjust
 /// fields as needed; [`DisParams::validate`] checks a hand-made set.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct DisParams {
-    /// Side of the square search patches, in pixels of the pyramid level.
+    /// Side of the square search patches, in pixels of the pyramid level: 4, 8, 12 or 16.
     pub patch_size: u32,
     /// Distance between neighbouring patch origins on the sparse grid (≤ `patch_size`).
     pub patch_stride: u32,
@@ -143,8 +146,11 @@ impl DisParams {
     /// Checks that the parameters describe a runnable estimator.
     pub fn validate(&self) -> Result<(), FlowError> {
         let bad = |problem: String| Err(FlowError::InvalidParams { problem });
-        if self.patch_size < 2 || self.patch_size > 64 {
-            return bad(format!("patch_size {} is outside 2..=64", self.patch_size));
+        if !SUPPORTED_PATCH_SIZES.contains(&self.patch_size) {
+            return bad(format!(
+                "patch_size {} is not one of {SUPPORTED_PATCH_SIZES:?}",
+                self.patch_size
+            ));
         }
         if self.patch_stride == 0 || self.patch_stride > self.patch_size {
             return bad(format!(
