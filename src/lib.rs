@@ -4,4 +4,5 @@
 //! The library is GUI-free below `app`; see `ARCHITECTURE.md` for the module map and the
 //! one-way data flow.
 
+pub mod model;
 pub mod sequence;
