@@ -8,8 +8,16 @@
 
 pub mod config;
 pub mod error;
+pub mod hf2vad;
+pub mod layers;
+pub mod losses;
+pub mod memae;
 pub mod rng;
+pub mod vunet;
 
 pub use config::{ColorOrder, FlowUnits, InputConventions, ModelConfig, SkipOp};
 pub use error::ModelError;
+pub use hf2vad::{Hf2Vad, Hf2VadOutput};
+pub use memae::{MemAeOutput, MlMemAeSc};
 pub use rng::NoiseRng;
+pub use vunet::{Latents, Vunet, VunetOutput};
