@@ -14,6 +14,7 @@ pub mod losses;
 pub mod memae;
 pub mod rng;
 pub mod vunet;
+pub mod weights;
 
 pub use config::{ColorOrder, FlowUnits, InputConventions, ModelConfig, SkipOp};
 pub use error::ModelError;
