@@ -5,4 +5,5 @@
 //! one-way data flow.
 
 pub mod eval;
+pub mod model;
 pub mod sequence;
