@@ -5,3 +5,4 @@
 //! one-way data flow.
 
 pub mod sequence;
+pub mod synth;
