@@ -239,9 +239,9 @@ pub fn read_flo(path: &Path) -> Result<FlowField, SequenceError> {
     decode_flo(path, &bytes)
 }
 
-/// Decodes `.flo` bytes; `path` is only used in error messages.
-pub fn decode_flo(path: &Path, bytes: &[u8]) -> Result<FlowField, SequenceError> {
-    let Some((header, data)) = bytes.split_first_chunk::<FLO_HEADER_BYTES>() else {
+/// Checks the 12-byte `.flo` header (length, tag, plausible size); returns (width, height).
+fn parse_flo_header(path: &Path, bytes: &[u8]) -> Result<(u32, u32), SequenceError> {
+    let Some(header) = bytes.first_chunk::<FLO_HEADER_BYTES>() else {
         return Err(SequenceError::format(
             path,
             format!(
@@ -262,7 +262,13 @@ pub fn decode_flo(path: &Path, bytes: &[u8]) -> Result<FlowField, SequenceError>
     }
     let width = i32::from_le_bytes([header[4], header[5], header[6], header[7]]);
     let height = i32::from_le_bytes([header[8], header[9], header[10], header[11]]);
-    let (width, height) = checked_size(path, i64::from(width), i64::from(height))?;
+    checked_size(path, i64::from(width), i64::from(height))
+}
+
+/// Decodes `.flo` bytes; `path` is only used in error messages.
+pub fn decode_flo(path: &Path, bytes: &[u8]) -> Result<FlowField, SequenceError> {
+    let (width, height) = parse_flo_header(path, bytes)?;
+    let data = bytes.get(FLO_HEADER_BYTES..).unwrap_or_default();
     let pixels = width as usize * height as usize;
     if data.len() != 8 * pixels {
         return Err(SequenceError::format(
@@ -411,6 +417,74 @@ fn npy_flow_shape(path: &Path, header: &str) -> Result<(u32, u32), SequenceError
         _ => Err(bad(format!(
             "npy shape {shape:?} is not (height, width, 2)"
         ))),
+    }
+}
+
+/// Checks a flow file's header and size without decoding its values; returns (width,
+/// height). Used by validation, which must stay fast on long scenarios.
+pub fn probe_flow(path: &Path) -> Result<(u32, u32), SequenceError> {
+    use std::io::Read;
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let file_len = std::fs::metadata(path)
+        .map_err(|e| SequenceError::io(path, e))?
+        .len();
+    let read_prefix = |limit: u64| -> Result<Vec<u8>, SequenceError> {
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|f| f.take(limit).read_to_end(&mut bytes))
+            .map_err(|e| SequenceError::io(path, e))?;
+        Ok(bytes)
+    };
+    match extension.as_deref() {
+        Some("png") => {
+            let header = super::images::read_header(path)?;
+            if header.color != super::images::ColorLayout::Rgb16 {
+                return Err(SequenceError::format(
+                    path,
+                    format!(
+                        "KITTI flow PNG must be 16-bit RGB, found {:?}",
+                        header.color
+                    ),
+                ));
+            }
+            Ok((header.width, header.height))
+        }
+        Some("flo") => {
+            let (width, height) = parse_flo_header(path, &read_prefix(FLO_HEADER_BYTES as u64)?)?;
+            let needed = (FLO_HEADER_BYTES + 8 * width as usize * height as usize) as u64;
+            if file_len != needed {
+                return Err(SequenceError::format(
+                    path,
+                    format!(
+                        "truncated or padded .flo: {width}x{height} needs {needed} bytes, the file has {file_len}"
+                    ),
+                ));
+            }
+            Ok((width, height))
+        }
+        Some("npy") => {
+            let bytes = read_prefix(1 << 16)?;
+            let (header, data) = split_npy_header(path, &bytes)?;
+            let (height, width) = npy_flow_shape(path, header)?;
+            let data_len = file_len - (bytes.len() - data.len()) as u64;
+            let needed = 8 * u64::from(width) * u64::from(height);
+            if data_len != needed {
+                return Err(SequenceError::format(
+                    path,
+                    format!(
+                        "npy data has {data_len} bytes, shape ({height}, {width}, 2) float32 needs {needed}"
+                    ),
+                ));
+            }
+            Ok((width, height))
+        }
+        _ => Err(SequenceError::format(
+            path,
+            "unknown flow file type (expected .png, .flo or .npy)",
+        )),
     }
 }
 

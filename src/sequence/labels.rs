@@ -1,12 +1,19 @@
-//! Per-frame anomaly flags: the explicit `frame_labels.csv` (`frame,anomaly`, 0/1) and the
-//! names of the sources a flag can be derived from when that file is missing.
+//! Per-frame anomaly flags: the explicit `frame_labels.csv` (`frame,anomaly`, 0/1), and
+//! their derivation when that file is missing (anovox-format.md B.9 rule 3).
 
 use std::path::Path;
 
+use rayon::prelude::*;
 use serde::Serialize;
 
 use super::csv_table::CsvTable;
-use super::{FrameId, SequenceError};
+use super::images::read_semantic;
+use super::index::FrameRun;
+use super::keyvalue::read_key_values;
+use super::layout::FRAME_LABELS_FILE;
+use super::scenario::Scenario;
+use super::validate::FileProblem;
+use super::{AnomalyType, FrameId, Modality, SequenceError, palette};
 
 /// The header of `frame_labels.csv`.
 pub const FRAME_LABELS_HEADER: &str = "frame,anomaly";
@@ -80,6 +87,193 @@ impl std::fmt::Display for LabelSource {
             LabelSource::None => "none (all normal)",
         })
     }
+}
+
+/// AnoVox's sudden-braking window in recorded-frame terms: sorted indices 124–154 of a
+/// complete 200-frame scenario (ticks 140–170, tick = index + 16).
+pub const SUDDEN_BRAKING_INDICES: std::ops::RangeInclusive<usize> = 124..=154;
+/// Frames of a complete AnoVox scenario.
+pub const ANOVOX_FRAMES: usize = 200;
+/// A lead-vehicle brake at or above this counts as the emergency brake.
+pub const EMERGENCY_BRAKE: f64 = 0.99;
+
+/// The per-frame anomaly flags of a scenario, by frame index.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FrameLabels {
+    /// `flags[i]` is true when frame index `i` is anomalous.
+    pub flags: Vec<bool>,
+    /// Where the flags came from.
+    pub source: LabelSource,
+    /// Files that could not be used while deriving (not fatal).
+    pub problems: Vec<FileProblem>,
+}
+
+impl FrameLabels {
+    /// Whether frame `index` is anomalous (false outside the scenario).
+    pub fn is_anomalous(&self, index: usize) -> bool {
+        self.flags.get(index).copied().unwrap_or(false)
+    }
+
+    /// Number of anomalous frames.
+    pub fn anomalous_count(&self) -> usize {
+        self.flags.iter().filter(|&&f| f).count()
+    }
+}
+
+/// Derives the flags of `scenario`, in order of preference:
+/// 1. `frame_labels.csv` (frames without a row count as normal and are noted);
+/// 2. the semantic images: a frame is anomalous when any pixel has an anomaly id (100,
+///    29–34) or colour ((245, 0, 0), (245, k, 0));
+/// 3. the scenario window: `scenario.json`'s `anomaly_window`, or for AnoVox
+///    `SUDDEN_BREAKING_OF_VEHICLE_AHEAD` scenarios of exactly 200 frames the sorted indices
+///    124–154;
+/// 4. the ANOMALY csv: `brake` ≥ 0.99;
+/// 5. otherwise every frame is normal.
+///
+/// A source that cannot be read at all (e.g. a malformed `frame_labels.csv`) is noted and
+/// the next one is tried; single unreadable files count as normal frames and are noted.
+pub fn derive_frame_labels(scenario: &Scenario) -> FrameLabels {
+    let mut problems = Vec::new();
+    let file = scenario.root().join(FRAME_LABELS_FILE);
+    if file.is_file() {
+        match read_frame_labels(&file) {
+            Ok(rows) => return labels_from_rows(scenario, &file, &rows, problems),
+            Err(error) => problems.push(FileProblem::from_error(&error)),
+        }
+    }
+    if scenario.has(Modality::Semantic) {
+        let (flags, mut unreadable) = flags_from_files(scenario, Modality::Semantic, |path| {
+            let semantic = read_semantic(path)?;
+            Ok(semantic
+                .ids
+                .as_raw()
+                .iter()
+                .any(|&id| palette::is_anomaly_id(id)))
+        });
+        problems.append(&mut unreadable);
+        return FrameLabels {
+            flags,
+            source: LabelSource::SemanticImages,
+            problems,
+        };
+    }
+    if let Some(flags) = flags_from_window(scenario) {
+        return FrameLabels {
+            flags,
+            source: LabelSource::ScenarioWindow,
+            problems,
+        };
+    }
+    if scenario.has(Modality::Anomaly) {
+        let (flags, mut unreadable) = flags_from_files(scenario, Modality::Anomaly, |path| {
+            Ok(read_key_values(path)?
+                .brake()
+                .is_some_and(|b| b >= EMERGENCY_BRAKE))
+        });
+        problems.append(&mut unreadable);
+        return FrameLabels {
+            flags,
+            source: LabelSource::AnomalyBrake,
+            problems,
+        };
+    }
+    FrameLabels {
+        flags: vec![false; scenario.len()],
+        source: LabelSource::None,
+        problems,
+    }
+}
+
+fn labels_from_rows(
+    scenario: &Scenario,
+    file: &Path,
+    rows: &[(FrameId, bool)],
+    mut problems: Vec<FileProblem>,
+) -> FrameLabels {
+    let mut flags = vec![false; scenario.len()];
+    let mut covered = vec![false; scenario.len()];
+    let mut unknown = Vec::new();
+    for &(id, anomalous) in rows {
+        match scenario.index_of(id) {
+            Some(index) => {
+                flags[index] = anomalous;
+                covered[index] = true;
+            }
+            None => unknown.push(id.to_string()),
+        }
+    }
+    if !unknown.is_empty() {
+        problems.push(FileProblem::new(
+            file,
+            format!("rows for frames that do not exist: {}", unknown.join(", ")),
+        ));
+    }
+    let uncovered = scenario.frame_index().runs(|i| !covered[i]);
+    if !uncovered.is_empty() {
+        problems.push(FileProblem::new(
+            file,
+            format!(
+                "no row for frames {} (taken as normal)",
+                join_runs(&uncovered)
+            ),
+        ));
+    }
+    FrameLabels {
+        flags,
+        source: LabelSource::FrameLabelsFile,
+        problems,
+    }
+}
+
+/// Decides each frame that has a `modality` file, in parallel; unreadable files are noted.
+fn flags_from_files(
+    scenario: &Scenario,
+    modality: Modality,
+    decide: impl Fn(&Path) -> Result<bool, SequenceError> + Sync,
+) -> (Vec<bool>, Vec<FileProblem>) {
+    let results: Vec<Result<bool, SequenceError>> = (0..scenario.len())
+        .into_par_iter()
+        .map(|index| scenario.file(modality, index).map_or(Ok(false), &decide))
+        .collect();
+    let mut problems = Vec::new();
+    let flags = results
+        .into_iter()
+        .map(|result| {
+            result.unwrap_or_else(|error| {
+                problems.push(FileProblem::from_error(&error));
+                false
+            })
+        })
+        .collect();
+    (flags, problems)
+}
+
+fn flags_from_window(scenario: &Scenario) -> Option<Vec<bool>> {
+    let meta = scenario.meta();
+    if let Some(window) = meta.anomaly_window {
+        let ids = scenario.frame_index().ids();
+        return Some(
+            ids.iter()
+                .map(|id| (window.start..=window.end).contains(id))
+                .collect(),
+        );
+    }
+    if meta.anomaly_type == Some(AnomalyType::SuddenBraking) && scenario.len() == ANOVOX_FRAMES {
+        return Some(
+            (0..scenario.len())
+                .map(|i| SUDDEN_BRAKING_INDICES.contains(&i))
+                .collect(),
+        );
+    }
+    None
+}
+
+/// Runs as text, e.g. `#0-#3 (ids 16-19, 4 frames), #9 (id 25)`.
+pub fn join_runs(runs: &[FrameRun]) -> String {
+    runs.iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 #[cfg(test)]

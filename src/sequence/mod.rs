@@ -10,21 +10,34 @@
 //! the AnoVox frame id ([`FrameId`]) is kept beside it and never derived from time.
 
 pub mod boxes;
+pub mod cache;
 mod csv_table;
 pub mod depth;
+pub mod discovery;
 pub mod error;
 pub mod flow_file;
 pub mod images;
+pub mod index;
+pub mod inspect;
 pub mod keyvalue;
 pub mod labels;
 pub mod layout;
 pub mod meta;
 pub mod palette;
 pub mod py_literal;
+pub mod scenario;
 pub mod types;
+pub mod vadscope_dir;
+pub mod validate;
 pub mod writer;
 
+pub use discovery::discover_scenarios;
 pub use error::SequenceError;
 pub use flow_file::FlowField;
+pub use index::FrameIndex;
+pub use inspect::{InspectReport, ScenarioSummary, inspect};
+pub use labels::{FrameLabels, LabelSource};
+pub use scenario::{BoxSource, Scenario, ScenarioOptions};
 pub use types::*;
+pub use validate::{FileProblem, ValidationReport};
 pub use writer::ScenarioWriter;

@@ -48,8 +48,17 @@ const CITYSCAPES: [[u8; 3]; 29] = [
     [180, 165, 180],
 ];
 
-/// Colour AnoVox uses for every agent id (112–119).
-const AGENT_COLOUR: [u8; 3] = [3, 0, 143];
+/// AnoVox's colours of the agent ids (CARLA tag + 100, each one step off the tag's colour);
+/// AnoVox defines no agent train (117).
+const AGENT_COLOURS: [(u8, [u8; 3]); 7] = [
+    (112, [220, 20, 61]),
+    (113, [255, 0, 1]),
+    (114, [3, 0, 143]),
+    (115, [0, 0, 71]),
+    (116, [0, 60, 101]),
+    (118, [0, 0, 231]),
+    (119, [119, 11, 33]),
+];
 /// Colour of the ego vehicle.
 const EGO_COLOUR: [u8; 3] = [0, 0, 1];
 /// The older benchmark colours of the static anomaly categories 29–32.
@@ -76,16 +85,18 @@ pub fn is_anomaly_colour(rgb: [u8; 3]) -> bool {
     rgb[0] == 245 && rgb[2] == 0 && (rgb[1] == 0 || (29..=34).contains(&rgb[1]))
 }
 
-/// The palette colour of a class id; ids without a colour of their own draw black.
-/// Agent ids 112–119 share one colour, so they read back as 114.
+/// The palette colour of a class id (AnoVox `Definitions.LABELS`); ids without a colour of
+/// their own draw black, like unlabeled.
 pub fn colour_of(id: u8) -> [u8; 3] {
     match id {
         0..=28 => CITYSCAPES[usize::from(id)],
         29..=34 => [245, id, 0],
         ANOMALY => [245, 0, 0],
-        112..=119 => AGENT_COLOUR,
         EGO_VEHICLE => EGO_COLOUR,
-        _ => [0, 0, 0],
+        _ => AGENT_COLOURS
+            .iter()
+            .find(|(agent, _)| *agent == id)
+            .map_or([0, 0, 0], |(_, colour)| *colour),
     }
 }
 
@@ -101,7 +112,7 @@ fn colour_table() -> &'static HashMap<[u8; 3], u8> {
         table.extend((29..=34u8).map(|id| (colour_of(id), id)));
         table.extend(OLD_ANOMALY_COLOURS);
         table.insert(colour_of(ANOMALY), ANOMALY);
-        table.insert(AGENT_COLOUR, AGENT_CAR);
+        table.extend(AGENT_COLOURS.iter().map(|(id, colour)| (*colour, *id)));
         table.insert(EGO_COLOUR, EGO_VEHICLE);
         table
     })
@@ -120,7 +131,17 @@ mod tests {
 
     #[test]
     fn every_palette_id_reads_back() {
-        let ids = (0..=34u8).chain([ANOMALY, AGENT_CAR, EGO_VEHICLE]);
+        let ids = (0..=34u8).chain([
+            ANOMALY,
+            112,
+            113,
+            AGENT_CAR,
+            115,
+            116,
+            118,
+            119,
+            EGO_VEHICLE,
+        ]);
         for id in ids {
             assert_eq!(id_of_colour(colour_of(id)), Some(id), "id {id}");
         }
