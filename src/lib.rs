@@ -5,6 +5,7 @@
 //! one-way data flow.
 
 pub mod eval;
+pub mod flow;
 pub mod model;
 pub mod sequence;
 pub mod synth;
