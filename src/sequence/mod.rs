@@ -9,10 +9,22 @@
 //! Frame *index* (0-based position in the sorted frame list) is the primary key everywhere;
 //! the AnoVox frame id ([`FrameId`]) is kept beside it and never derived from time.
 
+pub mod boxes;
+mod csv_table;
+pub mod depth;
 pub mod error;
 pub mod flow_file;
+pub mod images;
+pub mod keyvalue;
+pub mod labels;
+pub mod layout;
+pub mod meta;
+pub mod palette;
+pub mod py_literal;
 pub mod types;
+pub mod writer;
 
 pub use error::SequenceError;
 pub use flow_file::FlowField;
 pub use types::*;
+pub use writer::ScenarioWriter;
