@@ -61,8 +61,10 @@ impl Detector {
     /// A detector around `model` (moved to inference mode on `device`).
     pub fn new(model: Hf2Vad, meta: CheckpointMeta, device: &Device) -> Result<Self, ModelError> {
         meta.config.validate()?;
+        let mut model = model.valid().to_device(device);
+        model.vunet = model.vunet.folded();
         Ok(Self {
-            model: model.valid().to_device(device),
+            model,
             meta,
             device: device.clone(),
             latents: InferenceLatents::Mean,
