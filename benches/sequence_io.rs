@@ -1,11 +1,13 @@
-//! Scenario I/O speed: writing a full 768×512 frame (all modalities) with `ScenarioWriter`.
+//! Scenario I/O speed at AnoVox's 768×512: writing a frame with every modality, opening and
+//! validating a 200-frame scenario, and decoding one frame's RGB, semantic and flow images.
 
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use image::{GrayImage, Luma, Rgb, RgbImage};
 use vadscope::sequence::{
-    BoxRecord, FlowField, FrameId, FrameRecord, KeyValues, ScenarioMeta, ScenarioWriter,
+    BoxRecord, FlowField, FrameId, FrameRecord, KeyValues, Scenario, ScenarioMeta, ScenarioOptions,
+    ScenarioWriter,
 };
 
 const W: u32 = 768;
@@ -115,5 +117,56 @@ fn bench_write_frame(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_write_frame);
+/// Frames in the scenario the read benchmarks open (one AnoVox scenario).
+const SCENARIO_FRAMES: u64 = 200;
+
+fn bench_read(c: &mut Criterion) {
+    let root = tempfile::tempdir().expect("temp dir");
+    let dir = root.path().join("Scenario_read");
+    let writer = ScenarioWriter::create(&dir, &ScenarioMeta::default()).expect("writer");
+    let template = synthetic_frame(0);
+    for id in 0..SCENARIO_FRAMES {
+        let frame = FrameRecord {
+            id: FrameId(id),
+            ..template.clone()
+        };
+        writer.write_frame(&frame).expect("writes");
+    }
+    writer.finish().expect("finishes");
+
+    let mut group = c.benchmark_group("sequence_read");
+    group.sample_size(20);
+    group.bench_function("open_scenario_200_frames", |b| {
+        b.iter(|| Scenario::open(black_box(&dir)).expect("opens"))
+    });
+    let scenario = Scenario::open(&dir).expect("opens");
+    group.bench_function("validate_scenario_200_frames", |b| {
+        b.iter(|| scenario.validate().expect("validates"))
+    });
+    // A zero budget stores nothing, so every call below decodes from disk.
+    let uncached = Scenario::open_with(
+        &dir,
+        ScenarioOptions {
+            cache_budget_bytes: 0,
+            ..ScenarioOptions::default()
+        },
+    )
+    .expect("opens");
+    group.bench_function("decode_rgb_768x512", |b| {
+        b.iter(|| uncached.rgb(black_box(7)).expect("rgb"))
+    });
+    group.bench_function("decode_semantic_768x512", |b| {
+        b.iter(|| uncached.semantic(black_box(7)).expect("semantic"))
+    });
+    group.bench_function("decode_flow_kitti_768x512", |b| {
+        b.iter(|| uncached.flow(black_box(7)).expect("flow"))
+    });
+    group.bench_function("rgb_cache_hit", |b| {
+        scenario.rgb(7).expect("warm");
+        b.iter(|| scenario.rgb(black_box(7)).expect("rgb"))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_write_frame, bench_read);
 criterion_main!(benches);

@@ -113,6 +113,31 @@ fn frame_labels_with_missing_and_unknown_rows_are_noted() {
 }
 
 #[test]
+fn frames_without_a_semantic_image_are_noted_when_semantic_images_decide() {
+    let root = tempfile::tempdir().expect("temp dir");
+    let frames = vec![
+        with_semantic(0, 100),
+        rgb_only(1),
+        rgb_only(2),
+        with_semantic(3, 14),
+    ];
+    let dir = write_scenario(
+        &root.path().join("Scenario_partial"),
+        &ScenarioMeta::default(),
+        &frames,
+    );
+    let labels = Scenario::open(&dir).expect("opens").frame_labels().clone();
+    assert_eq!(labels.source, LabelSource::SemanticImages);
+    assert_eq!(labels.flags, vec![true, false, false, false]);
+    let problems: Vec<String> = labels.problems.iter().map(ToString::to_string).collect();
+    assert_eq!(problems.len(), 1, "{problems:?}");
+    assert!(
+        problems[0].contains("SEMANTIC_IMG") && problems[0].contains("#1-#2"),
+        "{problems:?}"
+    );
+}
+
+#[test]
 fn scenario_window_from_metadata_is_used_without_images() {
     let root = tempfile::tempdir().expect("temp dir");
     let meta = ScenarioMeta {
@@ -232,7 +257,7 @@ fn boxes_are_derived_per_instance_id_for_vehicles_only() {
         &[frame],
     );
     let scenario = Scenario::open(&dir).expect("opens");
-    assert_eq!(scenario.box_source(), BoxSource::InstanceImages);
+    assert_eq!(scenario.box_source(), &BoxSource::InstanceImages);
     let boxes = scenario.boxes(0).expect("derived");
     let summary: Vec<(u64, u16, [f32; 4])> = boxes
         .iter()

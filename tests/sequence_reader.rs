@@ -168,7 +168,7 @@ fn detections_are_read_from_their_own_folder() {
     assert_eq!(detections.len(), 1);
     assert_eq!(detections[0].score, 0.5);
     assert!(detections[0].anomalous);
-    assert_eq!(scenario.box_source(), BoxSource::None);
+    assert_eq!(scenario.box_source(), &BoxSource::None);
     assert!(scenario.boxes(0).expect("none").is_empty());
 }
 
@@ -313,4 +313,11 @@ fn index_out_of_range_is_an_error_not_a_panic() {
     assert!(scenario.boxes(5).is_err());
     assert!(scenario.semantic(0).expect("absent is fine").is_none());
     assert!(scenario.flow(0).expect("absent").is_none());
+}
+
+#[test]
+fn scenario_and_writer_can_be_shared_between_threads() {
+    fn shareable<T: Send + Sync>() {}
+    shareable::<Scenario>();
+    shareable::<vadscope::sequence::ScenarioWriter>();
 }

@@ -61,8 +61,10 @@ impl Detector {
     /// A detector around `model` (moved to inference mode on `device`).
     pub fn new(model: Hf2Vad, meta: CheckpointMeta, device: &Device) -> Result<Self, ModelError> {
         meta.config.validate()?;
+        let mut model = model.valid().to_device(device);
+        model.vunet = model.vunet.folded();
         Ok(Self {
-            model: model.valid().to_device(device),
+            model,
             meta,
             device: device.clone(),
             latents: InferenceLatents::Mean,
@@ -149,12 +151,7 @@ impl Detector {
         let p = c.patch_size;
         let bgr = c.conventions.color_order == ColorOrder::Bgr;
         let [fx, fy] = c.conventions.flow_units.factors();
-        let frames = if bgr {
-            swap_colour_order(frames, p * p)
-        } else {
-            frames.to_vec()
-        };
-        let flows = scale_flows(flows, [fx, fy], p * p);
+        let (frames, flows) = to_model_conventions(c, frames, flows);
 
         let frames = tensor(frames, [n, c.cube_frame_channels(), p, p], &self.device);
         let flows_t = tensor(flows, [n, c.cube_flow_channels(), p, p], &self.device);
@@ -210,6 +207,24 @@ impl Detector {
             })
             .collect()
     }
+}
+
+/// Converts channel-major cube buffers from vadscope's conventions (RGB, native-pixel
+/// flows) to those of the model described by `config`.
+pub fn to_model_conventions(
+    config: &ModelConfig,
+    frames: &[f32],
+    flows: &[f32],
+) -> (Vec<f32>, Vec<f32>) {
+    let area = config.patch_size * config.patch_size;
+    let frames = match config.conventions.color_order {
+        ColorOrder::Bgr => swap_colour_order(frames, area),
+        ColorOrder::Rgb => frames.to_vec(),
+    };
+    (
+        frames,
+        scale_flows(flows, config.conventions.flow_units.factors(), area),
+    )
 }
 
 /// Sum in f64 (order-independent enough for scores of 1e5-element maps), returned as f32.

@@ -87,8 +87,8 @@ impl BatchNorm2d {
                 x,
                 self.weight.val(),
                 self.bias.val(),
-                self.running_mean.value().to_device(&device),
-                self.running_var.value().to_device(&device),
+                self.running_mean.value_sync().to_device(&device),
+                self.running_var.value_sync().to_device(&device),
                 self.eps,
             )
         }
@@ -220,6 +220,10 @@ pub struct NormConv2d {
     pub gamma: Param<Tensor<4>>,
     /// The weight-normalised convolution.
     pub conv: WeightNormConv2d,
+    /// γ, β and the weight norm folded into one conv, set by [`NormConv2d::folded`] for
+    /// inference. Used only on non-autodiff devices; weights must not change afterwards.
+    #[module(skip)]
+    pub cache: Option<FoldedConv>,
 }
 
 impl NormConv2d {
@@ -252,11 +256,17 @@ impl NormConv2d {
                 stride,
                 padding,
             },
+            cache: None,
         }
     }
 
     /// Applies the layer to `x` [B, C_in, H, W].
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        if let Some(cache) = &self.cache
+            && !x.device().is_autodiff()
+        {
+            return cache.forward(x);
+        }
         let out = conv2d(
             x,
             self.conv.weight(),
@@ -279,6 +289,12 @@ impl NormConv2d {
             bias,
             options: self.conv.options(),
         }
+    }
+
+    /// The layer with its folded form cached for inference (see [`NormConv2d::cache`]).
+    pub fn folded(self) -> Self {
+        let cache = Some(self.fold());
+        Self { cache, ..self }
     }
 }
 
@@ -326,6 +342,14 @@ pub struct ResBlock {
 }
 
 impl ResBlock {
+    /// The block with its convolution folded for inference.
+    pub fn folded(self) -> Self {
+        Self {
+            conv2d: self.conv2d.folded(),
+            ..self
+        }
+    }
+
     /// A block of `channels` channels.
     pub fn new(channels: usize, dropout: f64, device: &Device, rng: &mut NoiseRng) -> Self {
         Self {
@@ -354,6 +378,15 @@ pub struct SkipResBlock {
 }
 
 impl SkipResBlock {
+    /// The block with its convolutions folded for inference.
+    pub fn folded(self) -> Self {
+        Self {
+            conv2d: self.conv2d.folded(),
+            pre: self.pre.folded(),
+            ..self
+        }
+    }
+
     /// A block of `channels` channels.
     pub fn new(channels: usize, dropout: f64, device: &Device, rng: &mut NoiseRng) -> Self {
         Self {
@@ -380,6 +413,13 @@ pub struct Upsample {
 }
 
 impl Upsample {
+    /// The upsampler with its convolution folded for inference.
+    pub fn folded(self) -> Self {
+        Self {
+            up: self.up.folded(),
+        }
+    }
+
     /// An upsampler from `cin` to `cout` channels.
     pub fn new(cin: usize, cout: usize, device: &Device, rng: &mut NoiseRng) -> Self {
         Self {
@@ -401,6 +441,13 @@ pub struct Downsample {
 }
 
 impl Downsample {
+    /// The downsampler with its convolution folded for inference.
+    pub fn folded(self) -> Self {
+        Self {
+            down: self.down.folded(),
+        }
+    }
+
     /// A downsampler from `cin` to `cout` channels.
     pub fn new(cin: usize, cout: usize, device: &Device, rng: &mut NoiseRng) -> Self {
         Self {
@@ -482,7 +529,7 @@ mod tests {
             &device,
         );
         let a = values(layer.forward(x.clone()));
-        let b = values(layer.fold().forward(x));
+        let b = values(layer.folded().forward(x));
         let max = a
             .iter()
             .zip(&b)

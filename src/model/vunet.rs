@@ -35,6 +35,14 @@ pub struct VunetEncoder {
 }
 
 impl VunetEncoder {
+    fn folded(self) -> Self {
+        Self {
+            in_op: self.in_op.folded(),
+            blocks: self.blocks.into_iter().map(ResBlock::folded).collect(),
+            downs: self.downs.into_iter().map(Downsample::folded).collect(),
+        }
+    }
+
     fn new(nf_in: usize, config: &ModelConfig, device: &Device, rng: &mut NoiseRng) -> Self {
         let in_op = NormConv2d::new(nf_in, config.nf_start, 1, 1, 0, device, rng);
         let mut blocks = Vec::new();
@@ -102,6 +110,15 @@ struct Posterior {
 }
 
 impl ZConverter {
+    fn folded(self) -> Self {
+        Self {
+            conv1x1: self.conv1x1.folded(),
+            blocks: self.blocks.into_iter().map(SkipResBlock::folded).collect(),
+            channel_norm: self.channel_norm.folded(),
+            up: self.up.folded(),
+        }
+    }
+
     fn new(config: &ModelConfig, device: &Device, rng: &mut NoiseRng) -> Self {
         let nf = config.nf_max;
         let blocks = (0..3)
@@ -169,6 +186,26 @@ pub struct Bottleneck {
 }
 
 impl Bottleneck {
+    fn folded(self) -> Self {
+        Self {
+            conv1x1: self.conv1x1.folded(),
+            blocks: self.blocks.into_iter().map(SkipResBlock::folded).collect(),
+            channel_norm: self
+                .channel_norm
+                .into_iter()
+                .map(NormConv2d::folded)
+                .collect(),
+            up: self.up.folded(),
+            auto_first: self.auto_first.folded(),
+            auto_rest: self
+                .auto_rest
+                .into_iter()
+                .map(SkipResBlock::folded)
+                .collect(),
+            param_converter: self.param_converter.folded(),
+        }
+    }
+
     fn new(config: &ModelConfig, device: &Device, rng: &mut NoiseRng) -> Self {
         let nf = config.nf_max;
         let p = config.dropout;
@@ -246,6 +283,14 @@ pub struct Decoder {
 }
 
 impl Decoder {
+    fn folded(self) -> Self {
+        Self {
+            ups: self.ups.into_iter().map(Upsample::folded).collect(),
+            blocks: self.blocks.into_iter().map(SkipResBlock::folded).collect(),
+            final_layer: self.final_layer.folded(),
+        }
+    }
+
     fn new(config: &ModelConfig, device: &Device, rng: &mut NoiseRng) -> Self {
         let mut nf = config.nf_max;
         let mut ups = Vec::new();
@@ -397,6 +442,20 @@ pub struct Vunet {
 }
 
 impl Vunet {
+    /// The CVAE with every weight-normalised conv folded into a plain conv, for inference on
+    /// a non-autodiff device. The weights must not change afterwards (the folded copies
+    /// would go stale); training ignores the folded copies.
+    pub fn folded(self) -> Self {
+        Self {
+            f_phi: self.f_phi.folded(),
+            e_theta: self.e_theta.folded(),
+            zc: self.zc.folded(),
+            bottleneck: self.bottleneck.folded(),
+            decoder: self.decoder.folded(),
+            n_stages: self.n_stages,
+        }
+    }
+
     /// A freshly initialised CVAE (PyTorch default conv init, seeded by `rng`).
     pub fn new(config: &ModelConfig, device: &Device, rng: &mut NoiseRng) -> Self {
         let flows = config.cube_flow_channels();

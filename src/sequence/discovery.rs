@@ -133,12 +133,31 @@ fn list_subfolders(dir: &Path) -> Result<Vec<(String, PathBuf)>, SequenceError> 
     for entry in std::fs::read_dir(dir).map_err(|e| SequenceError::io(dir, e))? {
         let entry = entry.map_err(|e| SequenceError::io(dir, e))?;
         let name = entry.file_name().to_string_lossy().into_owned();
-        if !name.starts_with('.') && entry.path().is_dir() {
+        if !name.starts_with('.') && is_dir_entry(&entry) {
             folders.push((name, entry.path()));
         }
     }
     folders.sort();
     Ok(folders)
+}
+
+/// Whether a directory entry is a file, following symbolic links. The entry's own type
+/// needs no extra system call, which matters for folders of 30,000 frames.
+fn is_file_entry(entry: &std::fs::DirEntry) -> bool {
+    match entry.file_type() {
+        Ok(kind) if kind.is_symlink() => entry.path().is_file(),
+        Ok(kind) => kind.is_file(),
+        Err(_) => false,
+    }
+}
+
+/// Whether a directory entry is a folder, following symbolic links.
+fn is_dir_entry(entry: &std::fs::DirEntry) -> bool {
+    match entry.file_type() {
+        Ok(kind) if kind.is_symlink() => entry.path().is_dir(),
+        Ok(kind) => kind.is_dir(),
+        Err(_) => false,
+    }
 }
 
 fn classify_folder(name: &str, path: &Path) -> Option<ModalityFolder> {
@@ -259,7 +278,7 @@ fn list_frame_files(
     for entry in std::fs::read_dir(dir).map_err(|e| SequenceError::io(dir, e))? {
         let entry = entry.map_err(|e| SequenceError::io(dir, e))?;
         let name = entry.file_name().to_string_lossy().into_owned();
-        if !name.starts_with('.') && entry.path().is_file() {
+        if !name.starts_with('.') && is_file_entry(&entry) {
             names.push((name, entry.path()));
         }
     }

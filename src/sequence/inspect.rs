@@ -85,7 +85,7 @@ impl ScenarioSummary {
         let labels = scenario.frame_labels();
         let index = scenario.frame_index();
         let mut problems = labels.problems.clone();
-        let box_source = scenario.box_source();
+        let box_source = scenario.box_source().clone();
         let boxes_per_frame = if box_source == BoxSource::None {
             None
         } else {

@@ -1,7 +1,7 @@
 //! Per-frame anomaly flags: the explicit `frame_labels.csv` (`frame,anomaly`, 0/1), and
 //! their derivation when that file is missing (anovox-format.md B.9 rule 3).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -245,6 +245,20 @@ fn flags_from_files(
             })
         })
         .collect();
+    let without_file = scenario
+        .frame_index()
+        .runs(|i| scenario.file(modality, i).is_none());
+    if !without_file.is_empty() {
+        let folder = scenario.files().folders.get(&modality);
+        problems.push(FileProblem::new(
+            folder.map_or(scenario.root(), PathBuf::as_path),
+            format!(
+                "no {} file for frames {} (taken as normal)",
+                modality.folder(),
+                join_runs(&without_file)
+            ),
+        ));
+    }
     (flags, problems)
 }
 

@@ -8,6 +8,19 @@
 //!
 //! Frame *index* (0-based position in the sorted frame list) is the primary key everywhere;
 //! the AnoVox frame id ([`FrameId`]) is kept beside it and never derived from time.
+//!
+//! Entry points:
+//! - [`Scenario::open`] opens one scenario folder (benchmark or generator layout) and gives
+//!   lazy, cached access by frame index: [`Scenario::rgb`], [`Scenario::semantic`],
+//!   [`Scenario::instance`], [`Scenario::depth_m`], [`Scenario::anomaly_mask`],
+//!   [`Scenario::flow`], [`Scenario::action`], [`Scenario::anomaly_state`],
+//!   [`Scenario::boxes`], [`Scenario::detections`], [`Scenario::frame_labels`],
+//!   [`Scenario::cache_dir`], and [`Scenario::validate`] for a [`ValidationReport`].
+//! - [`discover_scenarios`] lists the scenarios under a dataset root; [`inspect()`] opens,
+//!   summarises and validates all of them for `vadscope inspect` (text or JSON).
+//! - [`ScenarioWriter`] writes the benchmark layout (thread-safe `write_frame`).
+//! - File formats on their own: [`flow_file`] (KITTI PNG, `.flo`, `.npy`), [`depth`],
+//!   [`images`], [`keyvalue`], [`boxes`], [`labels`], [`meta`], [`palette`].
 
 pub mod boxes;
 pub mod cache;

@@ -141,6 +141,8 @@ pub struct Scenario {
     meta: ScenarioMeta,
     resolution: (u32, u32),
     notes: Vec<FileProblem>,
+    box_source: BoxSource,
+    detections_file: Option<PathBuf>,
     options: ScenarioOptions,
     cache: ByteLru<(Slot, usize), Decoded>,
     labels: OnceLock<FrameLabels>,
@@ -183,6 +185,8 @@ impl Scenario {
         );
         let mut notes = files.notes.clone();
         let meta = load_meta(path, &name, &files, &mut notes);
+        let box_source = find_box_source(path, &files);
+        let detections_file = Some(path.join(DETECTIONS_FILE)).filter(|p| p.is_file());
         Ok(Self {
             root: path.to_path_buf(),
             name,
@@ -191,6 +195,8 @@ impl Scenario {
             meta,
             resolution,
             notes,
+            box_source,
+            detections_file,
             cache: ByteLru::new(options.cache_budget_bytes),
             options,
             labels: OnceLock::new(),
@@ -434,16 +440,9 @@ impl Scenario {
         self.labels.get_or_init(|| derive_frame_labels(self))
     }
 
-    /// Where [`Scenario::boxes`] come from.
-    pub fn box_source(&self) -> BoxSource {
-        let file = self.root.join(BOXES_FILE);
-        if file.is_file() {
-            BoxSource::File(file)
-        } else if self.has(Modality::Instance) {
-            BoxSource::InstanceImages
-        } else {
-            BoxSource::None
-        }
+    /// Where [`Scenario::boxes`] come from (decided when the scenario is opened).
+    pub fn box_source(&self) -> &BoxSource {
+        &self.box_source
     }
 
     /// Ground-truth boxes of frame `index`: from `BBOX_2D/boxes.csv`, else derived from the
@@ -452,9 +451,7 @@ impl Scenario {
         let id = self.frame_id_checked(index)?;
         match self.box_source() {
             BoxSource::File(path) => {
-                let table = self
-                    .ground_truth_boxes
-                    .get_or_init(|| load_box_table(&path));
+                let table = self.ground_truth_boxes.get_or_init(|| load_box_table(path));
                 Ok(boxes_of(table.as_ref().map_err(Clone::clone)?, id))
             }
             BoxSource::InstanceImages => self.derived_boxes(index, id),
@@ -465,11 +462,10 @@ impl Scenario {
     /// Detector boxes of frame `index` from `BBOX_2D_DET/boxes.csv` (empty without the file).
     pub fn detections(&self, index: usize) -> Result<Vec<BoxRecord>, SequenceError> {
         let id = self.frame_id_checked(index)?;
-        let path = self.root.join(DETECTIONS_FILE);
-        if !path.is_file() {
+        let Some(path) = &self.detections_file else {
             return Ok(Vec::new());
-        }
-        let table = self.detection_boxes.get_or_init(|| load_box_table(&path));
+        };
+        let table = self.detection_boxes.get_or_init(|| load_box_table(path));
         Ok(boxes_of(table.as_ref().map_err(Clone::clone)?, id))
     }
 
@@ -518,6 +514,17 @@ impl Scenario {
     /// Changes the decoded-frame cache's byte budget (evicting at once when lowered).
     pub fn set_cache_budget(&self, bytes: usize) {
         self.cache.set_budget(bytes);
+    }
+}
+
+fn find_box_source(root: &Path, files: &ScenarioFiles) -> BoxSource {
+    let file = root.join(BOXES_FILE);
+    if file.is_file() {
+        BoxSource::File(file)
+    } else if files.of(Modality::Instance).is_some_and(|f| !f.is_empty()) {
+        BoxSource::InstanceImages
+    } else {
+        BoxSource::None
     }
 }
 

@@ -55,7 +55,7 @@ impl ScenarioWriter {
         &self.dir
     }
 
-    /// Writes every modality present in `frame` (RGB_IMG/RGB_IMG_<id>.png, SEMANTIC_IMG (L PNG),
+    /// Writes every modality present in `frame` (`RGB_IMG/RGB_IMG_<id>.png`, SEMANTIC_IMG (L PNG),
     /// INSTANCE_IMG (RGB PNG), DEPTH_IMG (CARLA 24-bit RGB PNG), OPTICAL_FLOW (KITTI 16-bit PNG),
     /// ACTION/ANOMALY `key ; value` CSV) and records its boxes and anomaly flag.
     ///
