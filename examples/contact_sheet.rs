@@ -19,9 +19,17 @@ const CAPTION_H: u32 = 22;
 const SEED: u64 = 11;
 
 fn main() -> anyhow::Result<()> {
-    let out = PathBuf::from(std::env::args().nth(1).unwrap_or("docs/synth_contact_sheet.png".into()));
-    register_font("sans-serif", FontStyle::Normal, include_bytes!("../assets/fonts/DejaVuSans.ttf"))
-        .map_err(|_| anyhow::anyhow!("bundled font is not a valid TrueType file"))?;
+    let out = PathBuf::from(
+        std::env::args()
+            .nth(1)
+            .unwrap_or("docs/synth_contact_sheet.png".into()),
+    );
+    register_font(
+        "sans-serif",
+        FontStyle::Normal,
+        include_bytes!("../assets/fonts/DejaVuSans.ttf"),
+    )
+    .map_err(|_| anyhow::anyhow!("bundled font is not a valid TrueType file"))?;
 
     let weathers = [Weather::Sun, Weather::Rain, Weather::Fog, Weather::Night];
     let mut tiles: Vec<(RgbImage, String)> = Vec::new();
@@ -51,7 +59,10 @@ fn main() -> anyhow::Result<()> {
     let cell_h = TILE_H + CAPTION_H;
     let mut sheet = RgbImage::from_pixel(columns as u32 * TILE_W, rows * cell_h, Rgb([24, 24, 28]));
     for (i, (tile, _)) in tiles.iter().enumerate() {
-        let (x, y) = ((i % columns) as u32 * TILE_W, (i / columns) as u32 * cell_h + CAPTION_H);
+        let (x, y) = (
+            (i % columns) as u32 * TILE_W,
+            (i / columns) as u32 * cell_h + CAPTION_H,
+        );
         imageops::replace(&mut sheet, tile, x as i64, y as i64);
     }
     let (w, h) = sheet.dimensions();
@@ -59,7 +70,10 @@ fn main() -> anyhow::Result<()> {
         let root = BitMapBackend::with_buffer(sheet.as_mut(), (w, h)).into_drawing_area();
         let style = ("sans-serif", 15).into_font().color(&WHITE);
         for (i, (_, caption)) in tiles.iter().enumerate() {
-            let (x, y) = ((i % columns) as u32 * TILE_W + 6, (i / columns) as u32 * cell_h + 3);
+            let (x, y) = (
+                (i % columns) as u32 * TILE_W + 6,
+                (i / columns) as u32 * cell_h + 3,
+            );
             root.draw_text(caption, &style, (x as i32, y as i32))?;
         }
         root.present()?;
@@ -76,12 +90,29 @@ fn main() -> anyhow::Result<()> {
 fn ground_truth_tiles(record: &FrameRecord) -> Vec<(RgbImage, String)> {
     let mut boxed = record.rgb.clone();
     for b in &record.boxes {
-        let colour = if b.anomalous { Rgb([255, 40, 40]) } else { Rgb([60, 255, 120]) };
-        draw_rect(&mut boxed, b.x1 as i64, b.y1 as i64, b.x2 as i64 - 1, b.y2 as i64 - 1, colour);
+        let colour = if b.anomalous {
+            Rgb([255, 40, 40])
+        } else {
+            Rgb([60, 255, 120])
+        };
+        draw_rect(
+            &mut boxed,
+            b.x1 as i64,
+            b.y1 as i64,
+            b.x2 as i64 - 1,
+            b.y2 as i64 - 1,
+            colour,
+        );
     }
-    let mut tiles = vec![(boxed, "ground-truth boxes (red: anomalous lead)".to_string())];
+    let mut tiles = vec![(
+        boxed,
+        "ground-truth boxes (red: anomalous lead)".to_string(),
+    )];
     if let Some(semantic) = &record.semantic {
-        tiles.push((palette::colourise(semantic), "SEMANTIC_IMG (AnoVox ids; 100 = anomaly)".into()));
+        tiles.push((
+            palette::colourise(semantic),
+            "SEMANTIC_IMG (AnoVox ids; 100 = anomaly)".into(),
+        ));
     }
     if let Some(flow) = &record.flow {
         tiles.push((

@@ -180,7 +180,10 @@ fn interrupted_training_resumes_to_the_same_model() {
     );
     // Summaries went through JSON (last-bit rounding of f64), so compare them loosely.
     for (a, b) in resumed_report.stages.iter().zip(&whole_report.stages) {
-        let (a, b) = (a.as_ref().expect("stage ran"), b.as_ref().expect("stage ran"));
+        let (a, b) = (
+            a.as_ref().expect("stage ran"),
+            b.as_ref().expect("stage ran"),
+        );
         assert_eq!((a.epochs, a.best_epoch), (b.epochs, b.best_epoch));
         assert!((a.best_loss - b.best_loss).abs() <= 1e-12 * b.best_loss.abs());
         assert!((a.last_train_loss - b.last_train_loss).abs() <= 1e-12 * b.last_train_loss.abs());
