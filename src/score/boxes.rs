@@ -164,8 +164,15 @@ impl<'a> BoxProvider<'a> {
                     ))
                 })?;
                 let last = scenario.len() - 1;
-                // Neighbours outside the scenario repeat the first / last frame.
-                let wanted = [index.saturating_sub(1), index, (index + 1).min(last)];
+                // Neighbours outside the scenario are reflected (frame −1 is frame 1), so
+                // border frames still sum two differences and the threshold keeps its meaning.
+                let before = if index > 0 { index - 1 } else { last.min(1) };
+                let after = if index < last {
+                    index + 1
+                } else {
+                    last.saturating_sub(1)
+                };
+                let wanted = [before, index, after];
                 blurred.retain(|k, _| wanted.contains(k));
                 let mut frames = Vec::with_capacity(3);
                 for k in wanted {

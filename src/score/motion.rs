@@ -15,7 +15,8 @@
 //! Differences from the reference, on purpose: the two differences are added with
 //! saturation (the reference adds `uint8` arrays and wraps past 255, which turns very strong
 //! motion into weak motion); grown boxes are clipped to the image; frames outside the
-//! scenario repeat the first/last frame; an optional upper limit on the box area
+//! scenario are reflected ([`super::BoxProvider`] uses frame 1 as frame −1), so the first
+//! and last frames still sum two differences; an optional upper limit on the box area
 //! (`max_area_fraction`) drops the whole-scene regions that ego-motion produces.
 
 use image::{GrayImage, Luma, RgbImage};
