@@ -261,18 +261,19 @@ struct Run<'a> {
 }
 
 impl Run<'_> {
-    fn flush(&mut self) -> Result<(), ScoreError> {
-        if self.pending.is_empty() {
+    /// Scores the first `count` pending cubes (all when fewer are pending).
+    fn flush(&mut self, count: usize) -> Result<(), ScoreError> {
+        let count = count.min(self.pending.len());
+        if count == 0 {
             return Ok(());
         }
-        let first_frame = self.pending[0].0;
-        let frames: Vec<f32> = self
-            .pending
+        let batch: Vec<(usize, ObjectCube)> = self.pending.drain(..count).collect();
+        let first_frame = batch[0].0;
+        let frames: Vec<f32> = batch
             .iter()
             .flat_map(|(_, c)| c.frames.iter().map(|&b| f32::from(b) / 255.0))
             .collect();
-        let flows: Vec<f32> = self
-            .pending
+        let flows: Vec<f32> = batch
             .iter()
             .flat_map(|(_, c)| c.flows.iter().copied())
             .collect();
@@ -282,16 +283,16 @@ impl Run<'_> {
             source,
         };
         let results = self.scorer.score(&frames, &flows).map_err(model_error)?;
-        if results.len() != self.pending.len() {
+        if results.len() != batch.len() {
             return Err(model_error(ModelError::InvalidInput(format!(
                 "{} results for {} cubes",
                 results.len(),
-                self.pending.len()
+                batch.len()
             ))));
         }
         let area = self.patch * self.patch;
         let t = self.clip_hist;
-        for ((frame, cube), r) in self.pending.drain(..).zip(results) {
+        for ((frame, cube), r) in batch.into_iter().zip(results) {
             let sizes = [
                 (r.recon_flows.len(), 2 * t * area),
                 (r.predicted_frame.len(), 3 * area),
@@ -417,13 +418,15 @@ pub fn run_scoring(
         });
         run.pending
             .extend(frame_cubes.into_iter().map(|c| (index, c)));
-        if run.pending.len() >= plan.batch_size.max(1) {
+        let batch_size = plan.batch_size.max(1);
+        while run.pending.len() >= batch_size {
             if cancel.load(Ordering::Relaxed) {
                 return Err(cancelled());
             }
-            run.flush()?;
+            run.flush(batch_size)?;
             progress(ScoreProgress {
-                frames_done: index + 1,
+                // Frames before the first unscored cube are complete.
+                frames_done: run.pending.first().map_or(index + 1, |(frame, _)| *frame),
                 frames_total: total,
                 objects: run.objects.len(),
             });
@@ -432,7 +435,8 @@ pub fn run_scoring(
     if cancel.load(Ordering::Relaxed) {
         return Err(cancelled());
     }
-    run.flush()?;
+    let rest = run.pending.len();
+    run.flush(rest)?;
     if run.batch.objects > 0 {
         let last = run.batch.finish();
         run.batches.push(last);

@@ -163,7 +163,7 @@ pub fn square_frame(k: u64) -> RgbImage {
     let x0 = square_x(k);
     RgbImage::from_fn(SQUARE_W, SQUARE_H, |x, y| {
         if (x0..x0 + SQUARE).contains(&x) && (24..24 + SQUARE).contains(&y) {
-            if ((x - x0) / 5) % 2 == 0 {
+            if ((x - x0) / 5).is_multiple_of(2) {
                 Rgb([220, 200, 180])
             } else {
                 Rgb([120, 110, 100])
