@@ -71,13 +71,23 @@ fn warp_mae(prev: &FrameRecord, next: &FrameRecord) -> (f32, f32) {
 #[test]
 fn exact_flow_warps_consecutive_sun_frames_onto_each_other() {
     for (domain, seed) in [(Domain::City, 3u64), (Domain::Highway, 5)] {
-        let s = spec(ScenarioKind::Normal, domain, Weather::Sun, seed, 40, (192, 128));
+        let s = spec(
+            ScenarioKind::Normal,
+            domain,
+            Weather::Sun,
+            seed,
+            40,
+            (192, 128),
+        );
         let scenario = Scenario::build(&s).expect("build");
         let frames = scenario.render_range(20..23);
         let mut total = 0.0;
         for pair in frames.windows(2) {
             let (mae, valid) = warp_mae(&pair[0], &pair[1]);
-            println!("{domain:?}: MAE {mae:.2} grey levels over {:.0}% valid pixels", valid * 100.0);
+            println!(
+                "{domain:?}: MAE {mae:.2} grey levels over {:.0}% valid pixels",
+                valid * 100.0
+            );
             assert!(valid > 0.25, "too few valid flow pixels: {valid}");
             assert!(mae < 5.0, "{domain:?}: warping error {mae}");
             total += mae;
