@@ -233,3 +233,47 @@ fn flow_error_breakdown() {
     err_img.save(dir.join("flow_error.png")).expect("save");
     a.rgb.save(dir.join("flow_error_prev.png")).expect("save");
 }
+
+/// Rough timing of the stages of one frame (diagnostic, ignored by default; meaningful only
+/// with optimisation, e.g. `--config 'profile.dev.package.vadscope.opt-level=3'`).
+#[test]
+#[ignore]
+fn stage_timing() {
+    let size = env_or("SYNTH_LOOK_SIZE", "768x512");
+    let (w, h) = size.split_once('x').expect("WxH");
+    let (w, h): (u32, u32) = (w.parse().expect("width"), h.parse().expect("height"));
+    let frames: u32 = env_or("SYNTH_TIMING_FRAMES", "24").parse().expect("frames");
+    for (domain, weather) in [
+        (Domain::City, Weather::Sun),
+        (Domain::Highway, Weather::Rain),
+        (Domain::City, Weather::Night),
+    ] {
+        let mut spec = ScenarioSpec::new(ScenarioKind::Normal, domain, weather, 2024);
+        spec.width = w;
+        spec.height = h;
+        spec.frames = frames;
+        let t0 = std::time::Instant::now();
+        let scenario = Scenario::build(&spec).expect("build");
+        let t1 = std::time::Instant::now();
+        let n = std::sync::atomic::AtomicUsize::new(0);
+        scenario
+            .render_all(|_| {
+                n.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                Ok::<(), ()>(())
+            })
+            .expect("render");
+        let t2 = std::time::Instant::now();
+        let tmp = std::env::temp_dir().join("synth_stage_timing");
+        let _ = std::fs::remove_dir_all(&tmp);
+        vadscope::synth::generate_scenario(&spec, &tmp, |_| {}).expect("generate");
+        let t3 = std::time::Instant::now();
+        let _ = std::fs::remove_dir_all(&tmp);
+        println!(
+            "{domain:?} {weather:?} {w}x{h}: build {:.2}s, render {:.1} fps, render+write {:.1} fps ({} threads)",
+            (t1 - t0).as_secs_f32(),
+            frames as f32 / (t2 - t1).as_secs_f32(),
+            frames as f32 / (t3 - t2).as_secs_f32(),
+            rayon::current_num_threads()
+        );
+    }
+}

@@ -19,8 +19,37 @@ const DEPTH_TOL_REL: f32 = 0.01;
 /// Absolute depth tolerance of the occlusion test (m).
 const DEPTH_TOL_ABS: f32 = 0.03;
 
-/// Flow from the frame of `prev` to the frame of `view`.
-pub fn exact_flow(world: &World, prev: &GBuffer, view: &FrameView) -> FlowField {
+/// Decides visibility from the next frame's geometry buffer when that is unambiguous: the
+/// four pixel centres around q all show the object and their depths, interpolated to q,
+/// agree with the point's depth. Returns `None` when a ray must be cast.
+#[inline]
+fn quick_visibility(next: &GBuffer, u: f32, v: f32, key: u32, z: f32, tol: f32) -> Option<bool> {
+    let (w, h) = (next.width, next.height);
+    let x = u - 0.5;
+    let y = v - 0.5;
+    if x < 0.0 || y < 0.0 {
+        return None;
+    }
+    let (x0, y0) = (x as usize, y as usize);
+    if x0 + 1 >= w || y0 + 1 >= h {
+        return None;
+    }
+    let (fx, fy) = (x - x0 as f32, y - y0 as f32);
+    let i = y0 * w + x0;
+    let idx = [i, i + 1, i + w, i + w + 1];
+    if idx.iter().any(|&k| next.key[k] != key) {
+        return None;
+    }
+    if key == KEY_BACKDROP {
+        return Some(true);
+    }
+    let d = |k: usize| next.depth[idx[k]];
+    let depth = (d(0) * (1.0 - fx) + d(1) * fx) * (1.0 - fy) + (d(2) * (1.0 - fx) + d(3) * fx) * fy;
+    ((depth - z).abs() <= tol).then_some(true)
+}
+
+/// Flow from the frame of `prev` to the frame of `view`, whose geometry buffer is `next`.
+pub fn exact_flow(world: &World, prev: &GBuffer, view: &FrameView, next: &GBuffer) -> FlowField {
     let w = prev.width;
     let h = prev.height;
     let states_now = &world.traffic.states[view.frame];
@@ -57,10 +86,14 @@ pub fn exact_flow(world: &World, prev: &GBuffer, view: &FrameView) -> FlowField 
                 if q.u < 0.0 || q.v < 0.0 || q.u >= w as f32 || q.v >= h as f32 {
                     continue;
                 }
-                let seen = view.trace_point(q.u, q.v);
-                valid_row[x] = seen.key == key
-                    && (key == KEY_BACKDROP
-                        || (seen.t - q.z).abs() <= DEPTH_TOL_REL * q.z + DEPTH_TOL_ABS);
+                let tol = DEPTH_TOL_REL * q.z + DEPTH_TOL_ABS;
+                valid_row[x] = match quick_visibility(next, q.u, q.v, key, q.z, tol) {
+                    Some(v) => v,
+                    None => {
+                        let seen = view.trace_point(q.u, q.v);
+                        seen.key == key && (key == KEY_BACKDROP || (seen.t - q.z).abs() <= tol)
+                    }
+                };
             }
         });
     FlowField {

@@ -191,3 +191,18 @@ pub fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
     let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
 }
+
+/// `x.floor()` without a library call (the baseline x86-64 target has no rounding
+/// instruction, so `f32::floor` is a function call). Valid for |x| < 2^31.
+#[inline]
+pub fn floor(x: f32) -> f32 {
+    let t = x as i32 as f32;
+    if t > x { t - 1.0 } else { t }
+}
+
+/// Euclidean remainder of `x` by a positive `m`, in [0, m).
+#[inline]
+pub fn wrap(x: f32, m: f32) -> f32 {
+    let r = x - m * floor(x / m);
+    if r >= m { r - m } else { r.max(0.0) }
+}

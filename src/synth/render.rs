@@ -46,6 +46,11 @@ pub struct Prim {
     pub c: f32,
     /// sin(yaw).
     pub s: f32,
+    /// Smallest depth of the primitive's bounds (no hit can be nearer).
+    pub near: f32,
+    /// Screen rectangle of the geometry itself (binning may use a larger one that includes
+    /// shadows); rays outside it cannot hit.
+    pub rect: [f32; 4],
 }
 
 impl Prim {
@@ -128,6 +133,12 @@ pub struct FrameView<'w> {
     pub cam: Camera,
     /// Arc length of the camera (Frenet guess for the ground).
     pub cam_s: f32,
+    /// Lateral offset of the camera from the centreline.
+    cam_d: f32,
+    /// Road tangent at the camera.
+    road_tangent: (f32, f32),
+    /// Road curvature at the camera.
+    road_kappa: f32,
     /// Primitives of this frame.
     pub prims: Vec<Prim>,
     tiles_x: usize,
@@ -144,8 +155,9 @@ pub struct FrameView<'w> {
     pub shadow_step: Option<(f32, f32)>,
 }
 
-/// Screen rectangle of a set of camera-relative points, or `None` if all are behind.
-fn screen_rect(cam: &Camera, pts: &[V3]) -> Option<[f32; 4]> {
+/// Screen rectangle of a set of camera-relative points, or `None` if all are behind, and
+/// the smallest depth of the points (0 if some are behind the camera).
+fn screen_rect(cam: &Camera, pts: &[V3]) -> Option<([f32; 4], f32)> {
     let mut r = [
         f32::INFINITY,
         f32::INFINITY,
@@ -153,6 +165,7 @@ fn screen_rect(cam: &Camera, pts: &[V3]) -> Option<[f32; 4]> {
         f32::NEG_INFINITY,
     ];
     let mut behind = 0;
+    let mut near = f32::INFINITY;
     for p in pts {
         match cam.project_relative(*p) {
             Some(q) => {
@@ -160,6 +173,7 @@ fn screen_rect(cam: &Camera, pts: &[V3]) -> Option<[f32; 4]> {
                 r[1] = r[1].min(q.v);
                 r[2] = r[2].max(q.u);
                 r[3] = r[3].max(q.v);
+                near = near.min(q.z);
             }
             None => behind += 1,
         }
@@ -169,9 +183,9 @@ fn screen_rect(cam: &Camera, pts: &[V3]) -> Option<[f32; 4]> {
     }
     if behind > 0 {
         // Straddles the camera plane: be conservative.
-        return Some([0.0, 0.0, cam.width as f32, cam.height_px as f32]);
+        return Some(([0.0, 0.0, cam.width as f32, cam.height_px as f32], 0.0));
     }
-    Some([r[0] - 1.0, r[1] - 1.0, r[2] + 1.0, r[3] + 1.0])
+    Some(([r[0] - 1.0, r[1] - 1.0, r[2] + 1.0, r[3] + 1.0], near))
 }
 
 /// Whether a screen rectangle overlaps a `w × h` image.
@@ -240,7 +254,7 @@ impl<'w> FrameView<'w> {
         let tiles_x = w.div_ceil(TILE);
         let tiles_y = h.div_ceil(TILE);
         let highway = matches!(world.road.domain, Domain::Highway);
-        let draw = if highway { 700.0 } else { 420.0 };
+        let draw = if highway { 700.0 } else { 260.0 };
         let lighting = &world.lighting;
         let shadow_step = (lighting.sun.luminance() > 0.5).then(|| {
             let sd = lighting.sun_dir;
@@ -256,7 +270,7 @@ impl<'w> FrameView<'w> {
             let origin = cam.relative(obj.pos);
             let (c, s) = (obj.yaw.cos(), obj.yaw.sin());
             let (lo, hi) = obj.local_bounds();
-            if let Some(r) = screen_rect(&cam, &box_corners(origin, c, s, lo, hi))
+            if let Some((r, near)) = screen_rect(&cam, &box_corners(origin, c, s, lo, hi))
                 && on_screen(&r, w, h)
             {
                 prims.push(Prim {
@@ -264,6 +278,8 @@ impl<'w> FrameView<'w> {
                     origin,
                     c,
                     s,
+                    near,
+                    rect: r,
                 });
                 rects.push(r);
             }
@@ -280,6 +296,8 @@ impl<'w> FrameView<'w> {
             let (c, s) = (st.yaw.cos(), st.yaw.sin());
             let (lo, hi) = v.model.bounds();
             let mut pts = box_corners(origin, c, s, lo, hi).to_vec();
+            let body_rect = screen_rect(&cam, &pts)
+                .map_or([f32::INFINITY, f32::INFINITY, 0.0, 0.0], |(r, _)| r);
             if let Some((kx, ky)) = shadow_step {
                 let hgt = v.model.height;
                 for p in box_corners(origin, c, s, lo, V3::new(hi.x, hi.y, 0.0))
@@ -302,7 +320,7 @@ impl<'w> FrameView<'w> {
             {
                 pts.push(*p);
             }
-            if let Some(r) = screen_rect(&cam, &pts)
+            if let Some((r, near)) = screen_rect(&cam, &pts)
                 && on_screen(&r, w, h)
             {
                 prims.push(Prim {
@@ -310,16 +328,32 @@ impl<'w> FrameView<'w> {
                     origin,
                     c,
                     s,
+                    near,
+                    rect: body_rect,
                 });
                 rects.push(r);
             }
         }
-        let (tile_start, tile_items) = bin(&rects, tiles_x, tiles_y);
+        let road_here = world.road.centerline.sample(ego.s);
+        let (tile_start, mut tile_items) = bin(&rects, tiles_x, tiles_y);
+        // Nearest first, so that tracing can stop at the first primitive beyond its hit.
+        for t in 0..tiles_x * tiles_y {
+            let items = &mut tile_items[tile_start[t] as usize..tile_start[t + 1] as usize];
+            items.sort_by(|&a, &b| {
+                prims[a as usize]
+                    .near
+                    .total_cmp(&prims[b as usize].near)
+                    .then(a.cmp(&b))
+            });
+        }
         let mut view = FrameView {
             world,
             frame,
             cam,
             cam_s: ego.s,
+            cam_d: ego.d,
+            road_tangent: (road_here.tx, road_here.ty),
+            road_kappa: road_here.kappa,
             prims,
             tiles_x,
             tiles_y,
@@ -343,7 +377,7 @@ impl<'w> FrameView<'w> {
                     &view.cam,
                     &box_corners(lo, 1.0, 0.0, V3::default(), hi - lo),
                 )
-                .unwrap_or([-10.0, -10.0, -5.0, -5.0])
+                .map_or([-10.0, -10.0, -5.0, -5.0], |(r, _)| r)
             })
             .collect();
         let (ls, li) = bin(&light_rects, tiles_x, tiles_y);
@@ -375,21 +409,29 @@ impl<'w> FrameView<'w> {
     /// The nearest surface through continuous image point (u, v).
     #[inline]
     pub fn trace_point(&self, u: f32, v: f32) -> Hit {
-        self.trace(self.cam.ray(u, v), self.tile_of(u, v))
+        self.trace(self.cam.ray(u, v), u, v)
     }
 
-    /// Frenet coordinates of the camera-relative ground point at ray parameter `t`.
+    /// Frenet coordinates of the camera-relative ground point at ray parameter `t`, starting
+    /// Newton's iteration at `guess` (or, if `None`, at a curvature-aware estimate from the
+    /// road's tangent at the camera).
     #[inline]
-    fn frenet_at(&self, dir: V3, t: f32) -> (f32, f32) {
-        self.world.road.centerline.to_frenet(
-            self.cam.x + dir.x * t,
-            self.cam.y + dir.y * t,
-            self.cam_s + t,
-        )
+    fn frenet_at(&self, dir: V3, t: f32, guess: Option<f32>) -> (f32, f32) {
+        let (px, py) = (dir.x * t, dir.y * t);
+        let s0 = guess.unwrap_or_else(|| {
+            let (tx, ty) = self.road_tangent;
+            let along = px * tx + py * ty;
+            let across = -px * ty + py * tx + self.cam_d;
+            self.cam_s + along * (1.0 + self.road_kappa * across)
+        });
+        self.world
+            .road
+            .centerline
+            .to_frenet(self.cam.x + px, self.cam.y + py, s0)
     }
 
     /// Intersection with the ground: road plane, raised sidewalks and kerb faces.
-    fn ground(&self, dir: V3) -> Option<Hit> {
+    fn ground(&self, dir: V3, s_hint: Option<f32>) -> Option<Hit> {
         if dir.z >= -1e-6 {
             return None;
         }
@@ -406,16 +448,19 @@ impl<'w> FrameView<'w> {
         };
         let up = V3::new(0.0, 0.0, 1.0);
         if road.kerb_height <= 0.0 {
-            let (s, d) = self.frenet_at(dir, t0);
+            let (s, d) = self.frenet_at(dir, t0, s_hint);
             return Some(make(t0, s, d, 0.0, 0, up));
         }
         let kh = road.kerb_height;
         let t1 = (h - kh) / -dir.z;
-        let (s1, d1) = self.frenet_at(dir, t1);
+        let (s1, d1) = self.frenet_at(dir, t1, s_hint);
         if road.is_raised(s1, d1) {
             return Some(make(t1, s1, d1, kh, 0, up));
         }
-        let (s0, d0) = self.frenet_at(dir, t0);
+        // Along the ray, s grows by about the horizontal distance travelled along the road.
+        let (tx, ty) = self.road_tangent;
+        let ds_dt = dir.x * tx + dir.y * ty;
+        let (s0, d0) = self.frenet_at(dir, t0, Some(s1 + (t0 - t1) * ds_dt));
         if !road.is_raised(s0, d0) {
             return Some(make(t0, s0, d0, 0.0, 0, up));
         }
@@ -424,25 +469,38 @@ impl<'w> FrameView<'w> {
         let (mut lo, mut hi) = (t1, t0);
         for _ in 0..14 {
             let mid = 0.5 * (lo + hi);
-            let (s, d) = self.frenet_at(dir, mid);
+            let (s, d) = self.frenet_at(dir, mid, Some(s1 + (mid - t1) * ds_dt));
             if road.is_raised(s, d) {
                 hi = mid;
             } else {
                 lo = mid;
             }
         }
-        let (s, d) = self.frenet_at(dir, hi);
+        let (s, d) = self.frenet_at(dir, hi, Some(s1 + (hi - t1) * ds_dt));
         let z = (h + dir.z * hi).clamp(0.0, kh);
         Some(make(hi, s, d, z, 1, road.kerb_normal(s, d)))
     }
 
-    /// The nearest surface along camera ray `dir` (from [`Camera::ray`]) using the
-    /// primitives of `tile`.
-    pub fn trace(&self, dir: V3, tile: usize) -> Hit {
-        let mut hit = self.ground(dir).unwrap_or(Hit::sky(dir));
+    /// The nearest surface along camera ray `dir` through image point (u, v) (`dir` is
+    /// `self.cam.ray(u, v)`).
+    pub fn trace(&self, dir: V3, u: f32, v: f32) -> Hit {
+        self.trace_in_tile(dir, u, v, self.tile_of(u, v), None)
+    }
+
+    /// [`FrameView::trace`] for a point known to lie in `tile`; `s_hint` is the arc length of
+    /// a nearby ground point (speeds up the Frenet inversion, same result).
+    pub fn trace_in_tile(&self, dir: V3, u: f32, v: f32, tile: usize, s_hint: Option<f32>) -> Hit {
+        let mut hit = self.ground(dir, s_hint).unwrap_or(Hit::sky(dir));
         let o = self.cam.origin();
         for &pi in self.tile_prims(tile) {
             let prim = &self.prims[pi as usize];
+            if prim.near >= hit.t {
+                break;
+            }
+            let r = &prim.rect;
+            if u < r[0] || u > r[2] || v < r[1] || v > r[3] {
+                continue;
+            }
             let ol = (o - prim.origin).unrotate_z(prim.c, prim.s);
             let dl = dir.unrotate_z(prim.c, prim.s);
             let found = match prim.what {
@@ -479,14 +537,13 @@ impl<'w> FrameView<'w> {
         if dir.z < 0.0 || horiz <= 0.0 {
             return dir.z < 0.0;
         }
-        dir.z / horiz
-            < backdrop_height(
-                self.world.road.domain,
-                dir.y.atan2(dir.x),
-                self.world.backdrop_salt,
-            )
+        let elevation = dir.z / horiz;
+        elevation < BACKDROP_MAX && elevation < self.world.backdrop_at(dir.y.atan2(dir.x))
     }
 }
+
+/// Largest value [`backdrop_height`] returns.
+pub const BACKDROP_MAX: f32 = 0.09;
 
 /// Tangent of the elevation of the distant skyline (city) or hills (highway) at world
 /// azimuth `az`.
@@ -622,16 +679,28 @@ pub fn intersect_static(obj: &StaticObject, o: V3, d: V3, t_max: f32) -> Option<
 #[inline]
 pub fn panel_solid(obj: &StaticObject, x: f32, z: f32) -> bool {
     match obj.kind {
-        StaticKind::GuardRail => z >= 0.42 || (x + 40.0).rem_euclid(2.0) < 0.14,
+        StaticKind::GuardRail => z >= 0.42 || super::math::wrap(x + 40.0, 2.0) < 0.14,
         StaticKind::TreeLine => {
             let Shape::Panel { h, .. } = obj.shape else {
                 return true;
             };
+            // A row of crowns: rounded bumps on every 3.5 m with random heights, on top of a
+            // slowly varying canopy height.
             let salt = obj.salt;
-            let top = h
-                * (0.55
-                    + 0.3 * value2(x / 7.0, 0.0, salt)
-                    + 0.15 * value2(x / 2.2, 3.0, salt ^ 0x55));
+            let canopy = h * (0.6 + 0.4 * value2(x / 9.0, 0.0, salt));
+            let cell = super::math::floor(x / 3.5);
+            let mut top: f32 = 0.0;
+            for k in [cell - 1.0, cell, cell + 1.0] {
+                let jitter = super::rng::unit1(k as i32, salt);
+                let centre = (k + 0.5 + 0.6 * (jitter - 0.5)) * 3.5;
+                let radius = 2.2 + 1.2 * jitter;
+                let dx = (x - centre) / radius;
+                if dx.abs() < 1.0 {
+                    let crown =
+                        canopy * (0.8 + 0.25 * jitter) + radius * (1.0 - dx * dx).sqrt() - radius;
+                    top = top.max(crown);
+                }
+            }
             z < top
         }
         _ => true,

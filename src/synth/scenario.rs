@@ -43,22 +43,38 @@ pub struct World {
     pub ground_salt: u32,
     /// Cloud texture salt.
     pub cloud_salt: u32,
-    /// Skyline / hills salt.
-    pub backdrop_salt: u32,
+    /// Skyline / hills elevation (tangent) over azimuth, [`BACKDROP_SAMPLES`] samples over
+    /// [-π, π).
+    pub backdrop: Vec<f32>,
     /// Label the lead as agent car (114) / anomaly (100), as AnoVox does in sudden-braking
     /// scenarios.
     pub labels_lead_as_agent: bool,
 }
 
+/// Azimuth samples of the backdrop table.
+pub const BACKDROP_SAMPLES: usize = 4096;
+
 impl World {
+    /// Backdrop elevation (tangent) at world azimuth `az` (radians), linearly interpolated.
+    #[inline]
+    pub fn backdrop_at(&self, az: f32) -> f32 {
+        let n = BACKDROP_SAMPLES as f32;
+        let x = (az + std::f32::consts::PI) / std::f32::consts::TAU * n;
+        let i = (x.max(0.0) as usize) % BACKDROP_SAMPLES;
+        let f = (x - i as f32).clamp(0.0, 1.0);
+        let a = self.backdrop[i];
+        let b = self.backdrop[(i + 1) % BACKDROP_SAMPLES];
+        a + (b - a) * f
+    }
+
     /// The ego's headlights (night), camera-relative.
     pub fn ego_headlight(&self, cam: &Camera) -> Light {
         Light {
             pos: V3::new(2.4 * cam.c, 2.4 * cam.s, 0.75),
-            colour: Rgb::new(1.0, 0.95, 0.88) * 520.0,
-            dir: V3::new(cam.c, cam.s, -0.045).normalized(),
-            cos_outer: 0.84,
-            range: 80.0,
+            colour: Rgb::new(1.0, 0.95, 0.88) * 300.0,
+            dir: V3::new(cam.c, cam.s, -0.03).normalized(),
+            cos_outer: 0.6,
+            range: 90.0,
         }
     }
 }
@@ -106,7 +122,16 @@ impl Scenario {
                 lighting,
                 ground_salt: salts.next_u64() as u32,
                 cloud_salt: salts.next_u64() as u32,
-                backdrop_salt: salts.next_u64() as u32,
+                backdrop: {
+                    let salt = salts.next_u64() as u32;
+                    (0..BACKDROP_SAMPLES)
+                        .map(|i| {
+                            let az = -std::f32::consts::PI
+                                + std::f32::consts::TAU * i as f32 / BACKDROP_SAMPLES as f32;
+                            super::render::backdrop_height(spec.domain, az, salt)
+                        })
+                        .collect()
+                },
                 labels_lead_as_agent: spec.kind == ScenarioKind::Braking,
             },
         })
@@ -199,8 +224,10 @@ impl Scenario {
         sink: impl Fn(FrameRecord) -> Result<(), E> + Sync,
     ) -> Result<(), E> {
         let n = self.frame_count();
-        let chunks = (rayon::current_num_threads() * 2).max(1);
-        let size = n.div_ceil(chunks).max(8);
+        // One chunk per thread keeps the extra geometry pass at each chunk start rare; rows
+        // are parallel inside a frame as well, so threads stay busy at the end.
+        let chunks = rayon::current_num_threads().max(1);
+        let size = n.div_ceil(chunks).max(16);
         let ranges: Vec<Range<usize>> =
             (0..n).step_by(size).map(|a| a..(a + size).min(n)).collect();
         ranges.into_par_iter().try_for_each(|r| {

@@ -4,7 +4,7 @@
 //! with contact and sun shadows under vehicles, wet-road sky reflections and haze; plus the
 //! per-frame light and glow lists.
 
-use super::math::{Rgb, V3, smoothstep};
+use super::math::{Rgb, V3, floor, smoothstep, wrap};
 use super::render::{
     FrameView, Glow, Hit, KEY_BACKDROP, KEY_GROUND, KEY_SKY, Light, PrimRef, WHEEL_PART,
 };
@@ -92,7 +92,7 @@ pub fn sky(view: &FrameView, d: V3) -> Rgb {
         let k = 1200.0 / dn.z;
         let px = view.cam.x + dn.x * k;
         let py = view.cam.y + dn.y * k;
-        let n = fbm2(px, py, view.world.cloud_salt, 1400.0, 4, 0.5, 0.0);
+        let n = fbm2(px, py, view.world.cloud_salt, 1400.0, 3, 0.5, 0.0);
         let cover = smoothstep(1.05 - l.clouds, 1.3 - 0.6 * l.clouds, n + 0.15);
         let cloud = if l.weather == crate::sequence::Weather::Rain {
             Rgb::new(0.42, 0.43, 0.46) * (0.8 + 0.4 * n)
@@ -122,7 +122,7 @@ pub fn place_lights(view: &mut FrameView) {
                 colour: Rgb::new(1.0, 0.72, 0.42) * 26.0,
                 dir: V3::new(0.0, 0.0, -1.0),
                 cos_outer: 0.2,
-                range: 24.0,
+                range: 20.0,
             });
             glows.push(Glow {
                 pos,
@@ -141,7 +141,9 @@ pub fn place_lights(view: &mut FrameView) {
         let parked = v.role == Role::Parked;
         let lamp_y = 0.5 * (m.tail.y0 + m.tail.y1);
         let lamp_z = 0.5 * (m.tail.z0 + m.tail.z1);
-        if !parked && (l.night || st.brake_lights) {
+        // Lamps only glow towards the side they face.
+        let facing_camera = prim.c * prim.origin.x + prim.s * prim.origin.y < 0.0;
+        if !parked && !facing_camera && (l.night || st.brake_lights) {
             let strength = if st.brake_lights { 1.6 } else { 0.5 };
             for side in [-1.0f32, 1.0] {
                 let p = prim.origin
@@ -156,16 +158,23 @@ pub fn place_lights(view: &mut FrameView) {
         if l.night && !parked {
             let hy = 0.5 * (m.head.y0 + m.head.y1);
             let hz = 0.5 * (m.head.z0 + m.head.z1);
-            let fwd = V3::new(prim.c, prim.s, -0.06).normalized();
-            let front = prim.origin + V3::new(m.front_x + 0.3, 0.0, hz).rotate_z(prim.c, prim.s);
-            lights.push(Light {
-                pos: front,
-                colour: Rgb::new(1.0, 0.95, 0.85) * 220.0,
-                dir: fwd,
-                cos_outer: 0.86,
-                range: 45.0,
-            });
+            // Only nearby headlights light up the scene noticeably.
+            if prim.origin.x * prim.origin.x + prim.origin.y * prim.origin.y < 70.0 * 70.0 {
+                let fwd = V3::new(prim.c, prim.s, -0.06).normalized();
+                let front =
+                    prim.origin + V3::new(m.front_x + 0.3, 0.0, hz).rotate_z(prim.c, prim.s);
+                lights.push(Light {
+                    pos: front,
+                    colour: Rgb::new(1.0, 0.95, 0.85) * 220.0,
+                    dir: fwd,
+                    cos_outer: 0.86,
+                    range: 35.0,
+                });
+            }
             for side in [-1.0f32, 1.0] {
+                if !facing_camera {
+                    continue;
+                }
                 let p =
                     prim.origin + V3::new(m.front_x + 0.02, side * hy, hz).rotate_z(prim.c, prim.s);
                 glows.push(Glow {
@@ -233,14 +242,17 @@ fn light_from(l: &Light, p: V3, n: V3) -> Rgb {
     let spot = if l.dir == V3::default() {
         1.0
     } else {
+        // Brightest on the axis, fading smoothly to nothing at the cone's edge.
         let c = -ld.dot(l.dir);
-        smoothstep(l.cos_outer, l.cos_outer + 0.5 * (1.0 - l.cos_outer), c)
+        let k = ((c - l.cos_outer) / (1.0 - l.cos_outer)).clamp(0.0, 1.0);
+        k * k
     };
     if spot <= 0.0 {
         return Rgb::BLACK;
     }
     let fade = (1.0 - d2 / r2) * (1.0 - d2 / r2);
-    l.colour * (ndl * spot * fade / (d2 + 1.0))
+    // A lamp is not a point: soften the near field.
+    l.colour * (ndl * spot * fade / (d2 + 9.0))
 }
 
 /// Shades the hit of camera ray `dir` in `tile`.
@@ -378,12 +390,12 @@ fn ground(view: &FrameView, hit: &Hit, dn: V3, p_rel: V3, tile: usize) -> (Surfa
     let mut gloss = 0.0;
     let (albedo, semantic) = match region {
         GroundRegion::Road => {
-            let big = fbm2(s, d, salt, 7.0, 3, 0.5, fn_);
-            let grain = fbm2(s, d, salt ^ 0xa5a5, 0.35, 4, 0.65, fn_);
+            let big = fbm2(s, d, salt, 7.0, 2, 0.5, fn_);
+            let grain = fbm2(s, d, salt ^ 0xa5a5, 0.35, 3, 0.6, fn_);
             let mut a = 0.085 * (0.7 + 0.6 * big) * (0.78 + 0.44 * grain);
             // Repaired patches.
-            let cell_s = (s / 14.0).floor();
-            let cell_d = (d / 3.5).floor();
+            let cell_s = floor(s / 14.0);
+            let cell_d = floor(d / 3.5);
             let u = unit2(cell_s as i32, cell_d as i32, salt ^ 0x77);
             if u < 0.12 {
                 let x0 = cell_s * 14.0 + 2.0 + 6.0 * u;
@@ -394,7 +406,7 @@ fn ground(view: &FrameView, hit: &Hit, dn: V3, p_rel: V3, tile: usize) -> (Surfa
             // Polished wheel tracks in the lanes.
             let ad = d.abs();
             if ad < road.inner + road.lane_width * road.lanes as f32 && ad > road.inner {
-                let in_lane = (ad - road.inner).rem_euclid(road.lane_width) - 0.5 * road.lane_width;
+                let in_lane = wrap(ad - road.inner, road.lane_width) - 0.5 * road.lane_width;
                 let track = smoothstep(0.5, 0.2, (in_lane.abs() - 0.85).abs());
                 a *= 1.0 - 0.14 * track;
             }
@@ -409,13 +421,18 @@ fn ground(view: &FrameView, hit: &Hit, dn: V3, p_rel: V3, tile: usize) -> (Surfa
                 c = c * (1.0 - 0.5 * wet * (0.6 + 0.4 * puddle));
                 gloss = wet * (0.35 + 0.65 * puddle);
             }
-            // The label is the paint under the pixel centre, not the filtered coverage.
-            let point = road.marking(s, d, 0.0, 0.0);
-            let sem = if point.white + point.yellow > 0.5 {
-                24
+            // The label is the paint under the pixel centre, not the filtered coverage (which
+            // only differs near paint edges).
+            let cover = m.white + m.yellow;
+            let painted = if cover <= 0.0 {
+                false
+            } else if cover >= 1.0 {
+                true
             } else {
-                1
+                let point = road.marking(s, d, 0.0, 0.0);
+                point.white + point.yellow > 0.5
             };
+            let sem = if painted { 24 } else { 1 };
             (c, sem)
         }
         GroundRegion::Kerb => {
@@ -439,8 +456,8 @@ fn ground(view: &FrameView, hit: &Hit, dn: V3, p_rel: V3, tile: usize) -> (Surfa
         }
         GroundRegion::Terrain => {
             let edge = d.abs() - road.road_half;
-            let n = fbm2(s, d, salt ^ 0x4444, 2.5, 5, 0.55, fn_);
-            let dry = smoothstep(0.55, 0.75, fbm2(s, d, salt ^ 0x4545, 12.0, 2, 0.5, fn_));
+            let n = fbm2(s, d, salt ^ 0x4444, 2.5, 3, 0.55, fn_);
+            let dry = smoothstep(0.6, 0.8, value2(s / 12.0, d / 12.0, salt ^ 0x4545));
             let grass = Rgb::new(0.055, 0.085, 0.025).lerp(Rgb::new(0.12, 0.1, 0.05), dry)
                 * (0.6 + 0.8 * n);
             let gravel = Rgb::grey(0.13 * (0.8 + 0.4 * n));
@@ -452,7 +469,12 @@ fn ground(view: &FrameView, hit: &Hit, dn: V3, p_rel: V3, tile: usize) -> (Surfa
     // Vehicle contact shadows and sun shadows.
     let mut ao = 1.0;
     let mut sun_vis = 1.0;
+    // Vehicle shadows further away than this cover less than a pixel or two.
+    let shadow_range = 25.0 * view.cam.fx / 192.0;
     for &pi in view.tile_prims(tile) {
+        if hit.t > shadow_range {
+            break;
+        }
         let prim = &view.prims[pi as usize];
         let PrimRef::Vehicle(vi) = prim.what else {
             continue;
@@ -462,7 +484,14 @@ fn ground(view: &FrameView, hit: &Hit, dn: V3, p_rel: V3, tile: usize) -> (Surfa
         let out = ((gl.x.abs() - 0.5 * m.length + 0.15) / 1.2)
             .max((gl.y.abs() - 0.5 * m.width + 0.1) / 0.7);
         ao *= 1.0 - 0.8 * smoothstep(0.7, -0.4, out);
-        if sun_vis > 0.0 && view.shadow_step.is_some() {
+        if sun_vis > 0.0
+            && let Some((kx, ky)) = view.shadow_step
+        {
+            // Quick reject: outside the footprint stretched by the longest shadow.
+            let reach = m.height * (kx * kx + ky * ky).sqrt();
+            if gl.x.abs() > 0.5 * m.length + reach || gl.y.abs() > 0.5 * m.width + reach {
+                continue;
+            }
             let sl = l.sun_dir.unrotate_z(prim.c, prim.s);
             if super::render::intersect_vehicle(m, gl + V3::new(0.0, 0.0, 0.01), sl, 60.0).is_some()
             {
@@ -494,7 +523,7 @@ fn static_surface(view: &FrameView, index: usize, hit: &Hit, fu: f32, fw: f32) -
     match obj.kind {
         StaticKind::Building {
             palette,
-            floor,
+            floor: floor_h,
             bay,
             window,
             facing,
@@ -510,17 +539,7 @@ fn static_surface(view: &FrameView, index: usize, hit: &Hit, fu: f32, fw: f32) -
             let v = p.z;
             let wall_c = WALL_PALETTE[palette as usize % WALL_PALETTE.len()];
             let wall_n = fbm2(u, v, salt, 5.0, 3, 0.5, fu.max(fw));
-            let brick = fbm2(
-                u * 2.0,
-                v * 6.0,
-                salt ^ 0x99,
-                0.5,
-                2,
-                0.5,
-                (2.0 * fu).max(6.0 * fw),
-            );
-            let mut albedo = Rgb::new(wall_c[0], wall_c[1], wall_c[2])
-                * ((0.8 + 0.4 * wall_n) * (0.9 + 0.2 * brick));
+            let mut albedo = Rgb::new(wall_c[0], wall_c[1], wall_c[2]) * (0.8 + 0.4 * wall_n);
             let mut emissive = Rgb::BLACK;
             let mut gloss = 0.0;
             let ground_floor = 4.2;
@@ -528,16 +547,16 @@ fn static_surface(view: &FrameView, index: usize, hit: &Hit, fu: f32, fw: f32) -
             let win_w = bay * window;
             let glass_u = filtered_pulse(u - 0.5 * (bay - win_w), bay, win_w, fu);
             let sill = 0.95;
-            let win_h = floor * 0.47;
-            let glass_v = filtered_pulse(v - ground_floor - sill, floor, win_h, fw)
+            let win_h = floor_h * 0.47;
+            let glass_v = filtered_pulse(v - ground_floor - sill, floor_h, win_h, fw)
                 * filtered_band(v, ground_floor, z1 - 1.2, fw);
             let frame_u = filtered_pulse(u - 0.5 * (bay - win_w) + 0.1, bay, win_w + 0.2, fu);
-            let frame_v = filtered_pulse(v - ground_floor - sill + 0.1, floor, win_h + 0.2, fw)
+            let frame_v = filtered_pulse(v - ground_floor - sill + 0.1, floor_h, win_h + 0.2, fw)
                 * filtered_band(v, ground_floor, z1 - 1.2, fw);
             let glass = glass_u * glass_v;
             let frame = (frame_u * frame_v - glass).max(0.0);
-            let iu = ((u - 0.5 * (bay - win_w)) / bay).floor() as i32;
-            let iv = ((v - ground_floor - sill) / floor).floor() as i32;
+            let iu = floor((u - 0.5 * (bay - win_w)) / bay) as i32;
+            let iv = floor((v - ground_floor - sill) / floor_h) as i32;
             let wv = unit2(iu, iv, salt ^ 0x5151);
             let detail = octave_weight(bay, fu);
             let glass_tone = 0.05 + 0.06 * (0.5 + (wv - 0.5) * detail);

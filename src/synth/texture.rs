@@ -7,21 +7,45 @@
 //! pixel, which is what makes the exact ground-truth flow reproduce the images under
 //! bilinear warping instead of fighting aliasing.
 
-use super::rng::{hash2, unit2};
+use super::math::{floor, wrap};
+use super::rng::{hash2, hash32};
+
+/// Side of the table of random lattice values (noise repeats every 256 lattice cells, far
+/// beyond what one octave shows).
+const TABLE: usize = 256;
+
+/// Random values in [0, 1) for a 256×256 lattice, computed at compile time from the
+/// integer hash.
+static TABLE_VALUES: [f32; TABLE * TABLE] = {
+    let mut t = [0.0f32; TABLE * TABLE];
+    let mut i = 0;
+    while i < TABLE * TABLE {
+        t[i] = (hash32(i as u32 ^ 0x9e37_79b9) >> 8) as f32 * (1.0 / 16_777_216.0);
+        i += 1;
+    }
+    t
+};
 
 /// Value noise on the unit lattice in [0, 1], smoothly interpolated.
 #[inline]
 pub fn value2(x: f32, y: f32, salt: u32) -> f32 {
-    let xf = x.floor();
-    let yf = y.floor();
+    let xf = floor(x);
+    let yf = floor(y);
     let (ix, iy) = (xf as i32, yf as i32);
     let (fx, fy) = (x - xf, y - yf);
     let ux = fx * fx * (3.0 - 2.0 * fx);
     let uy = fy * fy * (3.0 - 2.0 * fy);
-    let a = unit2(ix, iy, salt);
-    let b = unit2(ix.wrapping_add(1), iy, salt);
-    let c = unit2(ix, iy.wrapping_add(1), salt);
-    let d = unit2(ix.wrapping_add(1), iy.wrapping_add(1), salt);
+    // The salt selects a pseudo-random window of the lattice table.
+    let h = salt.wrapping_mul(0x9e37_79b9);
+    let x0 = (ix as u32).wrapping_add(h) as usize % TABLE;
+    let y0 = (iy as u32).wrapping_add(h >> 16) as usize % TABLE;
+    let x1 = (x0 + 1) % TABLE;
+    let y1 = (y0 + 1) % TABLE;
+    let t = &TABLE_VALUES;
+    let a = t[x0 + y0 * TABLE];
+    let b = t[x1 + y0 * TABLE];
+    let c = t[x0 + y1 * TABLE];
+    let d = t[x1 + y1 * TABLE];
     let top = a + (b - a) * ux;
     let bottom = c + (d - c) * ux;
     top + (bottom - top) * uy
@@ -29,7 +53,7 @@ pub fn value2(x: f32, y: f32, salt: u32) -> f32 {
 
 /// Value noise on the unit 3D lattice in [0, 1].
 pub fn value3(x: f32, y: f32, z: f32, salt: u32) -> f32 {
-    let zf = z.floor();
+    let zf = floor(z);
     let iz = zf as i32;
     let fz = z - zf;
     let uz = fz * fz * (3.0 - 2.0 * fz);
@@ -85,7 +109,7 @@ pub fn fbm2(x: f32, y: f32, salt: u32, cell: f32, octaves: u32, gain: f32, footp
 /// returned as (whole periods, remainder) to keep precision for large `x`.
 #[inline]
 fn pulse_integral_parts(x: f32, p: f32, w: f32) -> (f32, f32) {
-    let n = (x / p).floor();
+    let n = floor(x / p);
     let r = (x - n * p).clamp(0.0, p);
     (n, r.min(w))
 }
@@ -95,7 +119,7 @@ fn pulse_integral_parts(x: f32, p: f32, w: f32) -> (f32, f32) {
 #[inline]
 pub fn filtered_pulse(x: f32, p: f32, w: f32, fw: f32) -> f32 {
     if fw < 1e-5 {
-        let m = x.rem_euclid(p);
+        let m = wrap(x, p);
         return if m < w { 1.0 } else { 0.0 };
     }
     let (n0, r0) = pulse_integral_parts(x - 0.5 * fw, p, w);

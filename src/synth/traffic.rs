@@ -2,7 +2,7 @@
 //!
 //! Every moving vehicle follows a route (a lane of the main road, a right turn into a cross
 //! street, or a lane of a cross street) and controls its speed with the Intelligent Driver
-//! Model (Treiber et al.): free-road acceleration towards its desired speed, braking for its
+//! Model (Treiber et al., in its IDM+ form): free-road acceleration towards its desired speed, braking for its
 //! leader (the nearest vehicle ahead that overlaps it laterally) and for red traffic lights.
 //! Normal braking is limited to [`NORMAL_DECEL_LIMIT`]. Scripted events (sudden braking of
 //! the lead, a lane change out of or into the ego lane) are triggered inside the simulation
@@ -137,8 +137,10 @@ pub struct Idm {
 }
 
 impl Idm {
-    /// IDM acceleration at speed `v` behind an obstacle `gap` metres ahead moving at
-    /// `v_lead` (no obstacle: `gap` infinite).
+    /// Acceleration at speed `v` behind an obstacle `gap` metres ahead moving at `v_lead`
+    /// (no obstacle: `gap` infinite). This is the IDM+ form (Schakel et al. 2010), the
+    /// minimum of the free-road and the interaction terms, so that a follower keeps the
+    /// desired gap `s0 + v·T` instead of the inflated IDM equilibrium gap.
     pub fn accel(&self, v: f32, gap: f32, v_lead: f32) -> f32 {
         let free = 1.0 - (v / self.v0.max(0.1)).powi(4);
         if !gap.is_finite() {
@@ -148,7 +150,7 @@ impl Idm {
         let s_star =
             self.s0 + (v * self.t_headway + v * dv / (2.0 * (self.a_max * self.b).sqrt())).max(0.0);
         let g = gap.max(0.05);
-        self.a_max * (free - (s_star / g) * (s_star / g))
+        self.a_max * free.min(1.0 - (s_star / g) * (s_star / g))
     }
 }
 
@@ -466,7 +468,7 @@ fn populate(spec: &ScenarioSpec, road: &mut Road, rng: &mut Rng) -> (Vec<Vehicle
     let ego_lane = if highway {
         match kind {
             ScenarioKind::Turning | ScenarioKind::CutIn => 1,
-            _ => [0u32, 1, 1, 2][rng.below(4)],
+            _ => [0u32, 1, 1, 1, 2][rng.below(5)],
         }
     } else {
         match kind {
@@ -483,7 +485,7 @@ fn populate(spec: &ScenarioSpec, road: &mut Road, rng: &mut Rng) -> (Vec<Vehicle
     let ego_model = VehicleModel::new(BodyType::Sedan, &mut rng.fork(1));
     let ego_len = ego_model.length;
     let mut ego_idm = idm_for(rng, domain, ego_v0, BodyType::Sedan);
-    ego_idm.t_headway = if highway { 1.5 } else { 1.4 };
+    ego_idm.t_headway = if highway { 1.05 } else { 1.0 };
     ego_idm.s0 = if highway { 3.0 } else { 2.5 };
     if kind == ScenarioKind::Braking {
         ego_idm.b_max = EGO_EMERGENCY_DECEL;
@@ -503,7 +505,7 @@ fn populate(spec: &ScenarioSpec, road: &mut Road, rng: &mut Rng) -> (Vec<Vehicle
     };
     let lead_gap = match kind {
         ScenarioKind::CutIn => rng.range(45.0, 60.0),
-        _ => 2.5 + lead_v0 * rng.range(1.3, 1.8),
+        _ => 2.5 + lead_v0 * rng.range(1.1, 1.4),
     };
     let lead_s = 0.5 * ego_len + lead_gap + 0.5 * lead_model.length;
     let lead_route = if kind == ScenarioKind::Turning && !highway {
@@ -542,9 +544,10 @@ fn populate(spec: &ScenarioSpec, road: &mut Road, rng: &mut Rng) -> (Vec<Vehicle
             let hi = ((frames as f32 * 0.65) as i64).min(frames - 45).max(lo);
             let f = lo + rng.below((hi - lo + 1) as usize) as i64;
             script.brake_frame = Some(f);
+            // No red light separates the ego from its lead before the event.
             let t_on = f as f32 * FRAME_DT;
             for x in &mut road.intersections {
-                x.force_main_green(t_on - 10.0, t_on + 14.0);
+                x.force_main_green(-(WARMUP_FRAMES as f32) * FRAME_DT, t_on + 14.0);
             }
         }
         ScenarioKind::Turning if !highway => {
@@ -621,7 +624,7 @@ fn populate(spec: &ScenarioSpec, road: &mut Road, rng: &mut Rng) -> (Vec<Vehicle
                     VehicleModel::new(body, &mut rng.fork(1000 + fleet.vehicles.len() as u64));
                 let heavy = matches!(body, BodyType::Truck | BodyType::Bus);
                 let v0 = if heavy {
-                    lane_v0.min(if highway { 23.0 } else { 12.0 }) * rng.range(0.95, 1.0)
+                    lane_v0.min(if highway { 25.0 } else { 12.0 }) * rng.range(0.95, 1.0)
                 } else {
                     lane_v0 * rng.range(0.93, 1.07)
                 };
@@ -1360,6 +1363,17 @@ fn check(spec: &ScenarioSpec, road: &Road, traffic: &Traffic) -> Result<(), Stri
             }
             if max_decel(traffic, LEAD) < 7.0 {
                 return Err("the lead brakes too gently".into());
+            }
+            // The ego follows the lead closely when it brakes.
+            let st = &traffic.states[w.start as usize];
+            let lengths =
+                0.5 * (traffic.vehicles[LEAD].model.length + traffic.vehicles[EGO].model.length);
+            let gap = st[LEAD].s - st[EGO].s - lengths;
+            let max_gap = (1.8 * st[EGO].speed).max(12.0);
+            if gap > max_gap {
+                return Err(format!(
+                    "the ego is {gap:.0} m behind the lead at brake onset"
+                ));
             }
             Ok(())
         }
