@@ -16,6 +16,7 @@
 use std::collections::HashMap;
 
 use image::GrayImage;
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::eval::{MetricsError, RocCurve, RocPoint, ScoreMetrics, macro_auroc};
@@ -207,16 +208,20 @@ pub fn evaluate_dataset(
     weights: &FusionWeights,
     options: &FrameMetricOptions,
 ) -> Result<Vec<EvalRow>, ScoreError> {
-    let mut prepared = Vec::with_capacity(items.len());
-    for item in items {
-        let raw = frame_scores(&item.table, weights);
-        let skip = options
-            .skip_first
-            .unwrap_or(item.table.meta.clip_hist as usize);
-        let (scores, labels) = metric_frames(&raw, &item.labels, skip, options.median_kernel)
-            .map_err(|e| ScoreError::Invalid(format!("{}: {e}", item.name)))?;
-        prepared.push((item, scores, labels));
-    }
+    // Scenarios are fused and filtered independently: spread them over the cores.
+    let prepared = items
+        .par_iter()
+        .map(|item| {
+            let raw = frame_scores(&item.table, weights);
+            let skip = options
+                .skip_first
+                .unwrap_or(item.table.meta.clip_hist as usize);
+            let (scores, labels) =
+                metric_frames(&raw, &item.labels, skip, options.median_kernel)
+                    .map_err(|e| ScoreError::Invalid(format!("{}: {e}", item.name)))?;
+            Ok((item, scores, labels))
+        })
+        .collect::<Result<Vec<_>, ScoreError>>()?;
     let mut sources: Vec<&str> = Vec::new();
     for item in items {
         if !sources.contains(&item.box_source.as_str()) {

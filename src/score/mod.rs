@@ -43,7 +43,7 @@ pub use evaluate::{EvalRow, PixelRoc, ScenarioScores, add_scenario_pixels, evalu
 pub use flows::{FlowProvider, FlowSource};
 pub use fusion::{
     FrameFusion, FrameMetricOptions, FusionWeights, Heatmap, HeatmapScratch, PixelReferenceMode,
-    compose_heatmap, frame_scores, metric_frames,
+    compose_heatmap, frame_scores, frame_scores_into, metric_frames,
 };
 pub use motion::MotionParams;
 pub use run::{
