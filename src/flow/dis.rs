@@ -87,13 +87,18 @@ impl DisFlow {
         let (w, h) = (width as usize, height as usize);
         let prev_plane = luma_plane(prev, w, h, "previous frame")?;
         let next_plane = luma_plane(next, w, h, "next frame")?;
-        let dense = self.estimate_planes(prev_plane, next_plane, temporal_prior);
-        Ok(to_flow_field(&dense))
+        let (level_flow, scale) = self.estimate_planes(prev_plane, next_plane, temporal_prior);
+        Ok(to_flow_field(&level_flow, w, h, scale))
     }
 
-    /// The coarse-to-fine loop on validated luminance planes. Returns the full-resolution
-    /// flow.
-    fn estimate_planes(&self, prev: Plane, next: Plane, prior: Option<&FlowField>) -> DenseFlow {
+    /// The coarse-to-fine loop on validated luminance planes. Returns the flow of the finest
+    /// level processed and that level's scale.
+    fn estimate_planes(
+        &self,
+        prev: Plane,
+        next: Plane,
+        prior: Option<&FlowField>,
+    ) -> (DenseFlow, usize) {
         let p = &self.params;
         let ps = p.patch_size as usize;
         let (w, h) = (prev.width, prev.height);
@@ -143,8 +148,8 @@ impl DisFlow {
             flow = Some(dense);
         }
         match flow {
-            Some(level_flow) => upsample(&level_flow, w, h, finest),
-            None => DenseFlow::zeros(w, h),
+            Some(level_flow) => (level_flow, finest),
+            None => (DenseFlow::zeros(w, h), 0),
         }
     }
 }
@@ -268,47 +273,47 @@ fn temporal_candidates(grid: &PatchGrid, prior: &FlowField, scale: usize) -> Vec
     out
 }
 
-/// Bilinear up-sampling of the flow of pyramid level `scale` to the full `w × h` grid,
-/// multiplying the values by `2^scale`.
-fn upsample(level: &DenseFlow, w: usize, h: usize, scale: usize) -> DenseFlow {
-    if scale == 0 {
-        return level.clone();
-    }
-    let factor = (1u32 << scale) as f32;
-    let inv = 1.0 / factor;
-    let mut out = DenseFlow::zeros(w, h);
-    out.u
-        .data
-        .par_chunks_mut(w)
-        .zip(out.v.data.par_chunks_mut(w))
-        .enumerate()
-        .for_each(|(y, (u_row, v_row))| {
-            let ly = (y as f32 + 0.5) * inv - 0.5;
-            for x in 0..w {
-                let lx = (x as f32 + 0.5) * inv - 0.5;
-                u_row[x] = factor * level.u.sample_clamped(lx, ly);
-                v_row[x] = factor * level.v.sample_clamped(lx, ly);
-            }
-        });
-    out
+/// Source index pair and weight of every output position when a level of `src` samples is
+/// up-sampled by `factor` with pixel-centre alignment (`x_src = (x + 0.5) / factor − 0.5`,
+/// clamped to the source).
+fn upsample_taps(out_len: usize, src: usize, factor: f32) -> Vec<(usize, usize, f32)> {
+    (0..out_len)
+        .map(|x| {
+            let pos = ((x as f32 + 0.5) / factor - 0.5).clamp(0.0, (src - 1) as f32);
+            let i0 = (pos as usize).min(src - 1);
+            (i0, (i0 + 1).min(src - 1), pos - i0 as f32)
+        })
+        .collect()
 }
 
-/// Interleaves a dense flow into the shared `FlowField` type, mapping any non-finite value
-/// to zero so that callers never see NaN.
-fn to_flow_field(flow: &DenseFlow) -> FlowField {
-    let uv = flow
-        .u
-        .data
-        .iter()
-        .zip(&flow.v.data)
-        .flat_map(|(&u, &v)| {
+/// The flow of pyramid level `scale`, up-sampled bilinearly to the full `w × h` grid with
+/// values multiplied by `2^scale`, as the shared interleaved `FlowField`. Non-finite values
+/// become zero so that callers never see NaN.
+fn to_flow_field(level: &DenseFlow, w: usize, h: usize, scale: usize) -> FlowField {
+    let factor = (1u32 << scale) as f32;
+    let (lw, lh) = (level.width(), level.height());
+    let cols = upsample_taps(w, lw, factor);
+    let rows = upsample_taps(h, lh, factor);
+    let mut uv = vec![0.0f32; 2 * w * h];
+    uv.par_chunks_mut(2 * w).enumerate().for_each(|(y, out)| {
+        let (y0, y1, fy) = rows[y];
+        let blend = |p: &Plane| -> Vec<f32> {
+            let (a, b) = (p.row(y0), p.row(y1));
+            a.iter()
+                .zip(b)
+                .map(|(a, b)| factor * (a + fy * (b - a)))
+                .collect()
+        };
+        let (u, v) = (blend(&level.u), blend(&level.v));
+        for (pair, &(x0, x1, fx)) in out.chunks_exact_mut(2).zip(&cols) {
             let clean = |a: f32| if a.is_finite() { a } else { 0.0 };
-            [clean(u), clean(v)]
-        })
-        .collect();
+            pair[0] = clean(u[x0] + fx * (u[x1] - u[x0]));
+            pair[1] = clean(v[x0] + fx * (v[x1] - v[x0]));
+        }
+    });
     FlowField {
-        width: flow.width() as u32,
-        height: flow.height() as u32,
+        width: w as u32,
+        height: h as u32,
         uv,
         valid: None,
     }

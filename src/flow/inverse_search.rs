@@ -16,6 +16,7 @@ use rayon::prelude::*;
 
 use super::grid::PatchGrid;
 use super::plane::{PaddedPlane, Plane};
+use super::simd;
 
 /// Stripes per pass: fixed so that results do not depend on the thread count.
 const STRIPES: usize = 8;
@@ -125,9 +126,15 @@ impl<const PS: usize> Template<PS> {
         }
     }
 
-    /// SSD and gradient for displacement `u`.
+    /// SSD and gradient for displacement `u`. `WIDE` selects the AVX2 kernel for 8-pixel
+    /// patches; it must only be set on the AVX2 path.
     #[inline(always)]
-    fn evaluate(&self, i1: &PaddedPlane, u: [f32; 2], mean_normalization: bool) -> Evaluation {
+    fn evaluate<const WIDE: bool>(
+        &self,
+        i1: &PaddedPlane,
+        u: [f32; 2],
+        mean_normalization: bool,
+    ) -> Evaluation {
         let px = self.x0 as f32 + u[0];
         let py = self.y0 as f32 + u[1];
         let fx0 = px.floor();
@@ -137,45 +144,57 @@ impl<const PS: usize> Template<PS> {
             && fy0 >= -pad
             && fx0 + (PS as f32) <= (i1.width + i1.pad - 1) as f32
             && fy0 + (PS as f32) <= (i1.height + i1.pad - 1) as f32;
-        let mut acc_r = [0.0f32; PS];
-        let mut acc_rr = [0.0f32; PS];
-        let mut acc_x = [0.0f32; PS];
-        let mut acc_y = [0.0f32; PS];
-        if inside {
+        let sums = if inside {
             let ax = px - fx0;
             let ay = py - fy0;
-            let w00 = (1.0 - ax) * (1.0 - ay);
-            let w01 = ax * (1.0 - ay);
-            let w10 = (1.0 - ax) * ay;
-            let w11 = ax * ay;
+            let weights = [
+                (1.0 - ax) * (1.0 - ay),
+                ax * (1.0 - ay),
+                (1.0 - ax) * ay,
+                ax * ay,
+            ];
             let base = i1.index(fx0 as isize, fy0 as isize);
-            for r in 0..PS {
-                let top = &i1.data[base + r * i1.stride..base + r * i1.stride + PS + 1];
-                let bottom =
-                    &i1.data[base + (r + 1) * i1.stride..base + (r + 1) * i1.stride + PS + 1];
-                for c in 0..PS {
-                    let p = w00 * top[c] + w01 * top[c + 1] + w10 * bottom[c] + w11 * bottom[c + 1];
-                    let d = p - self.t[r][c];
-                    acc_r[c] += d;
-                    acc_rr[c] += d * d;
-                    acc_x[c] += self.gx[r][c] * d;
-                    acc_y[c] += self.gy[r][c] * d;
-                }
-            }
+            let window = &i1.data[base..base + PS * i1.stride + PS + 1];
+            self.sums_window::<WIDE>(window, i1.stride, weights)
         } else {
-            for r in 0..PS {
-                for c in 0..PS {
-                    let p = i1.sample(px + c as f32, py + r as f32);
-                    let d = p - self.t[r][c];
-                    acc_r[c] += d;
-                    acc_rr[c] += d * d;
-                    acc_x[c] += self.gx[r][c] * d;
-                    acc_y[c] += self.gy[r][c] * d;
-                }
-            }
+            self.sums_clamped(i1, px, py)
+        };
+        self.finish(sums, mean_normalization)
+    }
+
+    /// Raw sums `[Σd, Σd², Σgx·d, Σgy·d]` over a patch inside `window`, on the AVX2 kernel
+    /// when `WIDE` and the patch is 8 pixels.
+    #[inline(always)]
+    fn sums_window<const WIDE: bool>(
+        &self,
+        window: &[f32],
+        stride: usize,
+        weights: [f32; 4],
+    ) -> [f32; 4] {
+        #[cfg(target_arch = "x86_64")]
+        if WIDE && PS == 8 {
+            // SAFETY: WIDE is only set on the AVX2 path, which runs after
+            // `simd::wide_vectors_available` confirmed AVX2 on this CPU.
+            return unsafe { patch8::sums_avx2(window, stride, weights, self.rows8()) };
         }
-        let (sum_r, mut ssd) = (lane_sum(&acc_r), lane_sum(&acc_rr));
-        let (mut bx, mut by) = (lane_sum(&acc_x), lane_sum(&acc_y));
+        self.sums_bilinear(window, stride, weights)
+    }
+
+    /// The three 8×8 tables of an 8-pixel template (only called when `PS == 8`).
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn rows8(&self) -> patch8::Tables<'_> {
+        patch8::Tables {
+            t: as_8x8(&self.t),
+            gx: as_8x8(&self.gx),
+            gy: as_8x8(&self.gy),
+        }
+    }
+
+    /// Applies mean normalisation to raw sums `[Σd, Σd², Σgx·d, Σgy·d]`.
+    #[inline(always)]
+    fn finish(&self, sums: [f32; 4], mean_normalization: bool) -> Evaluation {
+        let [sum_r, mut ssd, mut bx, mut by] = sums;
         if mean_normalization {
             let n = (PS * PS) as f32;
             ssd -= sum_r * sum_r / n;
@@ -185,11 +204,50 @@ impl<const PS: usize> Template<PS> {
         Evaluation { ssd, bx, by }
     }
 
+    /// Raw sums with the patch fully inside `window` (the samples from the top-left
+    /// corner, rows `stride` apart) and constant bilinear weights `[w00, w01, w10, w11]`.
+    #[inline(always)]
+    fn sums_bilinear(&self, window: &[f32], stride: usize, weights: [f32; 4]) -> [f32; 4] {
+        let [w00, w01, w10, w11] = weights;
+        let mut acc = [[0.0f32; PS]; 4];
+        for r in 0..PS {
+            let top = &window[r * stride..r * stride + PS + 1];
+            let bottom = &window[(r + 1) * stride..(r + 1) * stride + PS + 1];
+            for c in 0..PS {
+                let p = w00 * top[c] + w01 * top[c + 1] + w10 * bottom[c] + w11 * bottom[c + 1];
+                let d = p - self.t[r][c];
+                acc[0][c] += d;
+                acc[1][c] += d * d;
+                acc[2][c] += self.gx[r][c] * d;
+                acc[3][c] += self.gy[r][c] * d;
+            }
+        }
+        acc.map(|lanes| lane_sum(&lanes))
+    }
+
+    /// Raw sums for a patch reaching beyond the padding: per-pixel clamped sampling.
+    #[cold]
+    #[allow(clippy::needless_range_loop)] // `c` indexes four accumulators and three tables
+    fn sums_clamped(&self, i1: &PaddedPlane, px: f32, py: f32) -> [f32; 4] {
+        let mut acc = [[0.0f32; PS]; 4];
+        for r in 0..PS {
+            for c in 0..PS {
+                let p = i1.sample(px + c as f32, py + r as f32);
+                let d = p - self.t[r][c];
+                acc[0][c] += d;
+                acc[1][c] += d * d;
+                acc[2][c] += self.gx[r][c] * d;
+                acc[3][c] += self.gy[r][c] * d;
+            }
+        }
+        acc.map(|lanes| lane_sum(&lanes))
+    }
+
     /// Picks the best of the candidates, then runs Gauss–Newton steps from it while the
     /// cost keeps falling (halving a step that overshoots), never moving further than one
     /// patch size from the chosen start.
     #[inline(always)]
-    fn refine(
+    fn refine<const WIDE: bool>(
         &self,
         i1: &PaddedPlane,
         candidates: &[Option<[f32; 2]>],
@@ -198,7 +256,7 @@ impl<const PS: usize> Template<PS> {
     ) -> [f32; 2] {
         let mut best: Option<([f32; 2], Evaluation)> = None;
         for cand in candidates.iter().flatten() {
-            let e = self.evaluate(i1, *cand, mean_normalization);
+            let e = self.evaluate::<WIDE>(i1, *cand, mean_normalization);
             if best.is_none_or(|(_, b)| e.ssd < b.ssd) {
                 best = Some((*cand, e));
             }
@@ -220,7 +278,7 @@ impl<const PS: usize> Template<PS> {
                 if moved_sq.is_nan() || moved_sq > limit_sq {
                     break 'outer;
                 }
-                let e = self.evaluate(i1, next, mean_normalization);
+                let e = self.evaluate::<WIDE>(i1, next, mean_normalization);
                 if e.ssd < eval.ssd {
                     u = next;
                     eval = e;
@@ -241,10 +299,27 @@ impl<const PS: usize> Template<PS> {
     }
 }
 
-/// Sum of lanes in a fixed order (deterministic, vector-friendly accumulators upstream).
+/// Views a `PS × PS` table as 8 × 8 (only called when `PS == 8`).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn as_8x8<const PS: usize>(m: &[[f32; PS]; PS]) -> &[[f32; 8]; 8] {
+    m.as_flattened()
+        .as_chunks::<8>()
+        .0
+        .try_into()
+        .expect("the AVX2 kernel only runs for 8-pixel patches")
+}
+
+/// Sum of lanes in a fixed order. For 8 lanes it is the pairwise tree of the AVX2
+/// reduction (`(l0+l4)+(l2+l6)` plus `(l1+l5)+(l3+l7)`), so both paths round alike.
 #[inline(always)]
 fn lane_sum<const N: usize>(lanes: &[f32; N]) -> f32 {
-    lanes.iter().sum()
+    if N == 8 {
+        let q: [f32; 4] = std::array::from_fn(|i| lanes[i] + lanes[i + 4]);
+        (q[0] + q[2]) + (q[1] + q[3])
+    } else {
+        lanes.iter().sum()
+    }
 }
 
 /// Runs both passes on the grid and returns one vector per patch (row-major).
@@ -278,6 +353,16 @@ enum Direction {
     Backward,
 }
 
+/// Everything one pass shares between its stripes.
+struct Pass<'a> {
+    input: &'a SearchInput<'a>,
+    /// Vectors at the start of the pass (read for neighbours in other stripes).
+    start: &'a [[f32; 2]],
+    settings: SearchSettings,
+    direction: Direction,
+    rows_per_stripe: usize,
+}
+
 fn run_pass<const PS: usize>(
     input: &SearchInput,
     start: &[[f32; 2]],
@@ -285,73 +370,182 @@ fn run_pass<const PS: usize>(
     direction: Direction,
 ) -> Vec<[f32; 2]> {
     let grid = input.grid;
-    let (rows, cols) = (grid.rows(), grid.cols());
     let mut out = start.to_vec();
-    let rows_per_stripe = rows.div_ceil(STRIPES).max(1);
-    let iterations = match direction {
-        Direction::Forward => settings.forward_iterations,
-        Direction::Backward => settings.backward_iterations,
+    let pass = Pass {
+        input,
+        start,
+        settings,
+        direction,
+        rows_per_stripe: grid.rows().div_ceil(STRIPES).max(1),
     };
-    out.par_chunks_mut(rows_per_stripe * cols)
+    let wide = simd::wide_vectors_available();
+    out.par_chunks_mut(pass.rows_per_stripe * grid.cols())
         .enumerate()
         .for_each(|(stripe, block)| {
-            let first_row = stripe * rows_per_stripe;
-            let block_rows = block.len() / cols;
-            for local_step in 0..block_rows {
-                let local = match direction {
-                    Direction::Forward => local_step,
-                    Direction::Backward => block_rows - 1 - local_step,
-                };
-                let row = first_row + local;
-                for col_step in 0..cols {
-                    let col = match direction {
-                        Direction::Forward => col_step,
-                        Direction::Backward => cols - 1 - col_step,
-                    };
-                    let idx = row * cols + col;
-                    let mut candidates: [Option<[f32; 2]>; 4] = [None; 4];
-                    candidates[0] = Some(block[local * cols + col]);
-                    if settings.spatial_propagation {
-                        let (side_col, side_ok, vert_row, vert_ok) = match direction {
-                            Direction::Forward => {
-                                (col.wrapping_sub(1), col > 0, row.wrapping_sub(1), row > 0)
-                            }
-                            Direction::Backward => {
-                                (col + 1, col + 1 < cols, row + 1, row + 1 < rows)
-                            }
-                        };
-                        if side_ok {
-                            candidates[1] = Some(block[local * cols + side_col]);
-                        }
-                        if vert_ok {
-                            let in_stripe =
-                                vert_row >= first_row && vert_row < first_row + block_rows;
-                            candidates[2] = Some(if in_stripe {
-                                block[(vert_row - first_row) * cols + col]
-                            } else {
-                                start[vert_row * cols + col]
-                            });
-                        }
-                    }
-                    if direction == Direction::Forward {
-                        candidates[3] = input.temporal.and_then(|t| t[idx]);
-                    }
-                    let template = Template::<PS>::new(
-                        input,
-                        grid.xs[col],
-                        grid.ys[row],
-                        settings.mean_normalization,
-                    );
-                    block[local * cols + col] = template.refine(
-                        input.i1,
-                        &candidates,
-                        iterations,
-                        settings.mean_normalization,
-                    );
+            if wide {
+                // SAFETY: `wide_vectors_available` confirmed AVX2 on this CPU.
+                #[cfg(target_arch = "x86_64")]
+                unsafe {
+                    process_stripe_avx2::<PS>(&pass, stripe, block)
                 }
+            } else {
+                process_stripe::<PS, false>(&pass, stripe, block);
             }
         });
     out
+}
+
+/// [`process_stripe`] compiled for AVX2: one 8-wide vector per patch row.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn process_stripe_avx2<const PS: usize>(pass: &Pass, stripe: usize, block: &mut [[f32; 2]]) {
+    process_stripe::<PS, true>(pass, stripe, block);
+}
+
+/// Searches every patch of one stripe in the pass's raster order.
+#[inline(always)]
+fn process_stripe<const PS: usize, const WIDE: bool>(
+    pass: &Pass,
+    stripe: usize,
+    block: &mut [[f32; 2]],
+) {
+    let input = pass.input;
+    let grid = input.grid;
+    let (rows, cols) = (grid.rows(), grid.cols());
+    let settings = pass.settings;
+    let first_row = stripe * pass.rows_per_stripe;
+    let block_rows = block.len() / cols;
+    let forward = pass.direction == Direction::Forward;
+    let iterations = if forward {
+        settings.forward_iterations
+    } else {
+        settings.backward_iterations
+    };
+    for local_step in 0..block_rows {
+        let local = if forward {
+            local_step
+        } else {
+            block_rows - 1 - local_step
+        };
+        let row = first_row + local;
+        for col_step in 0..cols {
+            let col = if forward {
+                col_step
+            } else {
+                cols - 1 - col_step
+            };
+            let mut candidates: [Option<[f32; 2]>; 4] = [None; 4];
+            candidates[0] = Some(block[local * cols + col]);
+            if settings.spatial_propagation {
+                let (side_col, side_ok, vert_row, vert_ok) = if forward {
+                    (col.wrapping_sub(1), col > 0, row.wrapping_sub(1), row > 0)
+                } else {
+                    (col + 1, col + 1 < cols, row + 1, row + 1 < rows)
+                };
+                if side_ok {
+                    candidates[1] = Some(block[local * cols + side_col]);
+                }
+                if vert_ok {
+                    let in_stripe = vert_row >= first_row && vert_row < first_row + block_rows;
+                    candidates[2] = Some(if in_stripe {
+                        block[(vert_row - first_row) * cols + col]
+                    } else {
+                        pass.start[vert_row * cols + col]
+                    });
+                }
+            }
+            if forward {
+                candidates[3] = input.temporal.and_then(|t| t[row * cols + col]);
+            }
+            let template = Template::<PS>::new(
+                input,
+                grid.xs[col],
+                grid.ys[row],
+                settings.mean_normalization,
+            );
+            block[local * cols + col] = template.refine::<WIDE>(
+                input.i1,
+                &candidates,
+                iterations,
+                settings.mean_normalization,
+            );
+        }
+    }
+}
+
+/// The AVX2 kernel for 8×8 patches: one 256-bit vector per patch row.
+#[cfg(target_arch = "x86_64")]
+mod patch8 {
+    use std::arch::x86_64::{
+        __m256, _mm_add_ps, _mm_add_ss, _mm_cvtss_f32, _mm_movehl_ps, _mm_shuffle_ps,
+        _mm256_add_ps, _mm256_castps256_ps128, _mm256_extractf128_ps, _mm256_loadu_ps,
+        _mm256_mul_ps, _mm256_set1_ps, _mm256_setzero_ps, _mm256_sub_ps,
+    };
+
+    /// Template, x-gradient and y-gradient of one patch, row by row.
+    pub(super) struct Tables<'a> {
+        pub t: &'a [[f32; 8]; 8],
+        pub gx: &'a [[f32; 8]; 8],
+        pub gy: &'a [[f32; 8]; 8],
+    }
+
+    /// Loads 8 values starting at `slice[at]`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn load(slice: &[f32], at: usize) -> __m256 {
+        let eight: &[f32; 8] = slice[at..at + 8]
+            .try_into()
+            .expect("a range of 8 is 8 long");
+        // SAFETY: `eight` is a valid, initialised array of 8 floats; loadu has no alignment
+        // requirement.
+        unsafe { _mm256_loadu_ps(eight.as_ptr()) }
+    }
+
+    /// Sum of the 8 lanes as `((l0+l4)+(l2+l6)) + ((l1+l5)+(l3+l7))`, the order of the
+    /// portable `lane_sum`.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    fn hsum(v: __m256) -> f32 {
+        let q = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v));
+        let h = _mm_add_ps(q, _mm_movehl_ps(q, q));
+        _mm_cvtss_f32(_mm_add_ss(h, _mm_shuffle_ps::<0b01>(h, h)))
+    }
+
+    /// `[Σd, Σd², Σgx·d, Σgy·d]` with `d = bilinear sample − template`, exactly as the
+    /// portable `sums_bilinear` computes them.
+    ///
+    /// `window` starts at the top-left sample and holds 9 rows `stride` apart, 9 values each.
+    #[target_feature(enable = "avx2")]
+    pub(super) fn sums_avx2(
+        window: &[f32],
+        stride: usize,
+        weights: [f32; 4],
+        tables: Tables,
+    ) -> [f32; 4] {
+        let [w00, w01, w10, w11] = weights.map(|w| _mm256_set1_ps(w));
+        let mut acc = [_mm256_setzero_ps(); 4];
+        let mut top = load(window, 0);
+        let mut top_next = load(window, 1);
+        for r in 0..8 {
+            let bottom = load(window, (r + 1) * stride);
+            let bottom_next = load(window, (r + 1) * stride + 1);
+            let p = _mm256_add_ps(
+                _mm256_add_ps(
+                    _mm256_add_ps(_mm256_mul_ps(w00, top), _mm256_mul_ps(w01, top_next)),
+                    _mm256_mul_ps(w10, bottom),
+                ),
+                _mm256_mul_ps(w11, bottom_next),
+            );
+            let d = _mm256_sub_ps(p, load(&tables.t[r], 0));
+            acc[0] = _mm256_add_ps(acc[0], d);
+            acc[1] = _mm256_add_ps(acc[1], _mm256_mul_ps(d, d));
+            acc[2] = _mm256_add_ps(acc[2], _mm256_mul_ps(load(&tables.gx[r], 0), d));
+            acc[3] = _mm256_add_ps(acc[3], _mm256_mul_ps(load(&tables.gy[r], 0), d));
+            top = bottom;
+            top_next = bottom_next;
+        }
+        acc.map(|v| hsum(v))
+    }
 }
 
 #[cfg(test)]
@@ -409,6 +603,34 @@ mod tests {
                 (u[0] - 1.3).abs() < 0.1 && (u[1] + 0.7).abs() < 0.1,
                 "patch ({row}, {col}): {u:?}"
             );
+        }
+    }
+
+    #[test]
+    fn wide_and_portable_kernels_agree_bit_for_bit() {
+        let (i0, i1) = shifted_pair(40, 36, [0.6, -1.3]);
+        let (gx, gy) = i0.sobel_gradients();
+        let padded = PaddedPlane::new(&i1, 16);
+        let grid = PatchGrid::new(40, 36, 8, 4);
+        let input = SearchInput {
+            i0: &i0,
+            gx: &gx,
+            gy: &gy,
+            i1: &padded,
+            grid: &grid,
+            temporal: None,
+        };
+        let template = Template::<8>::new(&input, 12, 8, true);
+        for u in [[0.0, 0.0], [0.37, -1.21], [-3.9, 2.45], [30.0, -25.0]] {
+            let portable = template.evaluate::<false>(&padded, u, true);
+            if simd::wide_vectors_available() {
+                // `evaluate::<true>` needs AVX2, checked just above.
+                let wide = template.evaluate::<true>(&padded, u, true);
+                assert_eq!(portable.ssd.to_bits(), wide.ssd.to_bits(), "{u:?}");
+                assert_eq!(portable.bx.to_bits(), wide.bx.to_bits(), "{u:?}");
+                assert_eq!(portable.by.to_bits(), wide.by.to_bits(), "{u:?}");
+            }
+            assert!(portable.ssd.is_finite());
         }
     }
 }

@@ -30,6 +30,7 @@ mod inverse_search;
 mod metrics;
 mod params;
 mod plane;
+mod simd;
 mod variational;
 
 pub use colorize::{

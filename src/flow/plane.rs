@@ -96,27 +96,31 @@ impl Plane {
     pub fn downsample2(&self) -> Plane {
         let (w, h) = (self.width, self.height);
         let (cw, ch) = (w / 2, h / 2);
-        let at = |v: &[f32], i: isize, n: usize| v[i.clamp(0, n as isize - 1) as usize];
-        // Horizontal pass into a half-width buffer, then vertical pass.
+        // Horizontal pass: output column x blends input columns 2x−1 ..= 2x+2.
         let mut half = vec![0.0f32; cw * h];
-        for y in 0..h {
+        for (y, out) in half.chunks_exact_mut(cw.max(1)).enumerate().take(h) {
             let row = self.row(y);
-            for x in 0..cw {
+            let at = |i: isize| row[i.clamp(0, w as isize - 1) as usize];
+            for (x, o) in out.iter_mut().enumerate() {
                 let i = 2 * x as isize;
-                half[y * cw + x] = 0.125
-                    * (at(row, i - 1, w)
-                        + 3.0 * at(row, i, w)
-                        + 3.0 * at(row, i + 1, w)
-                        + at(row, i + 2, w));
+                *o = if x > 0 && 2 * x + 2 < w {
+                    let (a, b, c, d) = (row[2 * x - 1], row[2 * x], row[2 * x + 1], row[2 * x + 2]);
+                    0.125 * (a + 3.0 * b + 3.0 * c + d)
+                } else {
+                    0.125 * (at(i - 1) + 3.0 * at(i) + 3.0 * at(i + 1) + at(i + 2))
+                };
             }
         }
         let mut data = vec![0.0f32; cw * ch];
-        for y in 0..ch {
+        for (y, out) in data.chunks_exact_mut(cw.max(1)).enumerate().take(ch) {
             let i = 2 * y as isize;
-            let r = |k: isize| &half[(k.clamp(0, h as isize - 1) as usize) * cw..][..cw];
+            let r = |k: isize| {
+                let k = k.clamp(0, h as isize - 1) as usize;
+                &half[k * cw..(k + 1) * cw]
+            };
             let (a, b, c, d) = (r(i - 1), r(i), r(i + 1), r(i + 2));
             for x in 0..cw {
-                data[y * cw + x] = 0.125 * (a[x] + 3.0 * b[x] + 3.0 * c[x] + d[x]);
+                out[x] = 0.125 * (a[x] + 3.0 * b[x] + 3.0 * c[x] + d[x]);
             }
         }
         Plane::from_vec(cw, ch, data)
