@@ -19,7 +19,7 @@ use vadscope::score::{
     BoxMatchStats, BoxSource, CacheKey, CubeScorer, FlowSource, FrameMetricOptions, FrameState,
     FusionWeights, Heatmap, ModelKey, ObjectCube, PixelReferenceMode, PixelRoc, ScenarioScores,
     ScoreCache, ScoreError, ScoreProgress, ScoreRequest, ScoringPlan, add_scenario_pixels,
-    evaluate_dataset, run_scoring, score_scenario_with,
+    evaluate_dataset, format_eval_table, run_scoring, score_scenario_with,
 };
 use vadscope::sequence::{BoxRecord, Domain, FrameId, Scenario, ScenarioMeta, Weather};
 
@@ -375,8 +375,17 @@ fn a_real_detector_scores_a_scenario_through_the_seams() {
     });
 
     // Evaluation: labels from the scenario (anomalous from frame 4), IoU of GT boxes is 1.
-    let scores = ScenarioScores::from_table(&scenario, "ground truth", table.clone(), Some(0.5))
-        .expect("scores");
+    let scores = ScenarioScores::from_cache(&scenario, &request, ModelKey(42), Some(0.5))
+        .expect("scores")
+        .expect("scored");
+    assert_eq!(&scores.table, table);
+    assert_eq!(scores.box_source, "ground truth");
+    let unscored = ScoreRequest::new(BoxSource::Detections, FlowSource::Stored);
+    assert!(
+        ScenarioScores::from_cache(&scenario, &unscored, ModelKey(42), None)
+            .expect("lookup")
+            .is_none()
+    );
     assert_eq!(scores.labels, vec![false, false, false, false, true, true]);
     assert_eq!(
         (scores.domain, scores.weather),
@@ -524,6 +533,17 @@ fn the_dataset_table_groups_by_box_source_and_condition() {
     let iou = f64::from(vadscope::score::box_iou(&bbox(0.0), &bbox(2.0)));
     assert!((rows[0].mean_iou.expect("iou") - iou).abs() < 1e-9);
     assert_eq!(rows[0].box_recall, Some(0.0), "IoU 1/3 is below 0.5");
+    let text = format_eval_table(&rows);
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 6, "{text}");
+    assert!(
+        lines[0].starts_with("box source") && lines[0].contains("FPR95"),
+        "{text}"
+    );
+    assert!(
+        lines[2].starts_with("gt") && lines[2].contains("city") && lines[2].contains("100.0"),
+        "{text}"
+    );
     let single =
         evaluate_dataset(&items[2..3], &FusionWeights::ORIGINAL, &options).expect("evaluate");
     assert!(single[0].metrics.is_none(), "a single class has no ROC");

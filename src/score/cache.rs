@@ -228,13 +228,13 @@ pub struct ObjectScore {
 /// The per-pixel data of one scored object, each plane P×P row-major.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ObjectMaps {
-    /// Squared flow-reconstruction error, mean over the flow channels [P²].
+    /// Squared flow-reconstruction error, mean over the flow channels (P² values).
     pub flow_error: Vec<f32>,
-    /// Squared frame-prediction error, mean over R, G, B [P²].
+    /// Squared frame-prediction error, mean over R, G, B (P² values).
     pub frame_error: Vec<f32>,
-    /// Predicted patch, planar RGB bytes [3P²].
+    /// Predicted patch, planar RGB bytes (3·P² values).
     pub predicted: Vec<u8>,
-    /// Reconstructed last flow, planar u then v, native pixels [2P²].
+    /// Reconstructed last flow, planar u then v, native pixels (2·P² values).
     pub recon_flow: Vec<f32>,
 }
 

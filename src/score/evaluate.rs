@@ -16,6 +16,7 @@
 use std::collections::HashMap;
 
 use image::GrayImage;
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::eval::{MetricsError, RocCurve, RocPoint, ScoreMetrics, macro_auroc};
@@ -23,11 +24,12 @@ use crate::sequence::{BoxRecord, Domain, Scenario, Weather};
 
 use super::ScoreError;
 use super::boxes::BoxMatchStats;
-use super::cache::{ScoreCache, ScoreTable};
+use super::cache::{ModelKey, ScoreCache, ScoreTable};
 use super::fusion::{
     FrameMetricOptions, FusionWeights, Heatmap, HeatmapScratch, PixelReferenceMode,
     compose_heatmap, frame_scores, metric_frames,
 };
+use super::run::ScoreRequest;
 
 /// One scored scenario as evaluation sees it.
 #[derive(Debug, Clone, PartialEq)]
@@ -80,6 +82,30 @@ impl ScenarioScores {
             table,
             boxes,
         })
+    }
+}
+
+impl ScenarioScores {
+    /// The scores of `scenario` for `request` and `model` from its score cache, with box
+    /// agreement at `iou_threshold`; `Ok(None)` when the scenario has not been scored so.
+    /// The rows of [`evaluate_dataset`] are grouped by [`super::BoxSource::label`].
+    pub fn from_cache(
+        scenario: &Scenario,
+        request: &ScoreRequest,
+        model: ModelKey,
+        iou_threshold: Option<f32>,
+    ) -> Result<Option<Self>, ScoreError> {
+        let key = request.key(scenario, model)?;
+        let Some(cache) = ScoreCache::lookup(scenario, &key)? else {
+            return Ok(None);
+        };
+        Self::from_table(
+            scenario,
+            request.boxes.label(),
+            cache.into_table(),
+            iou_threshold,
+        )
+        .map(Some)
     }
 }
 
@@ -207,16 +233,20 @@ pub fn evaluate_dataset(
     weights: &FusionWeights,
     options: &FrameMetricOptions,
 ) -> Result<Vec<EvalRow>, ScoreError> {
-    let mut prepared = Vec::with_capacity(items.len());
-    for item in items {
-        let raw = frame_scores(&item.table, weights);
-        let skip = options
-            .skip_first
-            .unwrap_or(item.table.meta.clip_hist as usize);
-        let (scores, labels) = metric_frames(&raw, &item.labels, skip, options.median_kernel)
-            .map_err(|e| ScoreError::Invalid(format!("{}: {e}", item.name)))?;
-        prepared.push((item, scores, labels));
-    }
+    // Scenarios are fused and filtered independently: spread them over the cores.
+    let prepared = items
+        .par_iter()
+        .map(|item| {
+            let raw = frame_scores(&item.table, weights);
+            let skip = options
+                .skip_first
+                .unwrap_or(item.table.meta.clip_hist as usize);
+            let (scores, labels) =
+                metric_frames(&raw, &item.labels, skip, options.median_kernel)
+                    .map_err(|e| ScoreError::Invalid(format!("{}: {e}", item.name)))?;
+            Ok((item, scores, labels))
+        })
+        .collect::<Result<Vec<_>, ScoreError>>()?;
     let mut sources: Vec<&str> = Vec::new();
     for item in items {
         if !sources.contains(&item.box_source.as_str()) {
@@ -248,6 +278,76 @@ pub fn evaluate_dataset(
         }
     }
     Ok(rows)
+}
+
+/// The table as aligned text, one row per line (metrics as percentages, `-` where a
+/// metric is undefined).
+pub fn format_eval_table(rows: &[EvalRow]) -> String {
+    let percent =
+        |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{:.1}", 100.0 * v));
+    let header = [
+        "box source",
+        "domain",
+        "weather",
+        "scen.",
+        "frames",
+        "anom.",
+        "AUROC",
+        "AUROC macro",
+        "AUPR",
+        "FPR95",
+        "FPR95 closest",
+        "mIoU",
+        "recall",
+    ];
+    let mut cells: Vec<Vec<String>> = vec![header.iter().map(|h| h.to_string()).collect()];
+    for r in rows {
+        let m = r.metrics;
+        cells.push(vec![
+            r.box_source.clone(),
+            r.domain
+                .map_or_else(|| "all".into(), |d| format!("{d:?}").to_lowercase()),
+            r.weather
+                .map_or_else(|| "all".into(), |w| format!("{w:?}").to_lowercase()),
+            r.scenarios.to_string(),
+            r.frames.to_string(),
+            r.anomalous_frames.to_string(),
+            percent(m.map(|m| m.auroc)),
+            percent(r.auroc_macro),
+            percent(m.map(|m| m.average_precision)),
+            percent(m.map(|m| m.fpr95)),
+            percent(m.map(|m| m.fpr95_closest)),
+            percent(r.mean_iou),
+            percent(r.box_recall),
+        ]);
+    }
+    let widths: Vec<usize> = (0..header.len())
+        .map(|c| {
+            cells
+                .iter()
+                .map(|row| row[c].chars().count())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let mut out = String::new();
+    for row in &cells {
+        let line: Vec<String> = row
+            .iter()
+            .zip(&widths)
+            .enumerate()
+            .map(|(c, (cell, &w))| {
+                if c < 3 {
+                    format!("{cell:<w$}")
+                } else {
+                    format!("{cell:>w$}")
+                }
+            })
+            .collect();
+        out.push_str(line.join("  ").trim_end());
+        out.push('\n');
+    }
+    out
 }
 
 /// Pixel scores and labels merged into score bins, for a ROC curve over any number of

@@ -17,8 +17,9 @@
 //!   scalar part, [`ScoreCache::frame_maps`] reads one frame's maps.
 //! - [`fusion::frame_scores`], [`fusion::metric_frames`], [`fusion::compose_heatmap`] with
 //!   [`FusionWeights`] (presets [`FusionWeights::PRESETS`]) and [`PixelReferenceMode`].
-//! - [`evaluate_dataset`]: the table by box source and domain × weather (AUROC micro and
-//!   macro, AP, FPR95, box IoU and recall); [`PixelRoc`] for pixel-level metrics.
+//! - [`ScenarioScores::from_cache`] + [`evaluate_dataset`] + [`format_eval_table`]: the
+//!   table by box source and domain × weather (AUROC micro and macro, AP, FPR95, box IoU
+//!   and recall); [`PixelRoc`] + [`add_scenario_pixels`] for pixel-level metrics.
 
 pub mod boxes;
 pub mod cache;
@@ -39,11 +40,13 @@ pub use cache::{
 };
 pub use detections::{DetectionFile, DetectionFormat, FrameNumbering};
 pub use error::ScoreError;
-pub use evaluate::{EvalRow, PixelRoc, ScenarioScores, add_scenario_pixels, evaluate_dataset};
+pub use evaluate::{
+    EvalRow, PixelRoc, ScenarioScores, add_scenario_pixels, evaluate_dataset, format_eval_table,
+};
 pub use flows::{FlowProvider, FlowSource};
 pub use fusion::{
     FrameFusion, FrameMetricOptions, FusionWeights, Heatmap, HeatmapScratch, PixelReferenceMode,
-    compose_heatmap, frame_scores, metric_frames,
+    compose_heatmap, frame_scores, frame_scores_into, metric_frames,
 };
 pub use motion::MotionParams;
 pub use run::{

@@ -18,6 +18,16 @@
 //! scenario are reflected ([`super::BoxProvider`] uses frame 1 as frame −1), so the first
 //! and last frames still sum two differences; an optional upper limit on the box area
 //! (`max_area_fraction`) drops the whole-scene regions that ego-motion produces.
+//!
+//! **Limits on a moving camera.** Frame differencing finds what changes in the image, and
+//! from a driving car that is mostly the scene streaming past (road markings, guardrails,
+//! buildings), while a lead vehicle that keeps its distance barely changes. Measured on two
+//! generated 768×512 scenarios (30 frames, city/sun and highway/rain, 25–43 ground-truth
+//! vehicles per frame, most of them distant and tiny) the driving constants give 8–16
+//! boxes per frame with a mean IoU against the vehicles of about 0.01 and a recall at IoU
+//! 0.5 below 1 %, and no threshold/area setting in 15–35 / 10²–40² does better. The boxes
+//! reproduce the original HF²-VAD and need no weights; for driving data prefer ground truth
+//! or a detector (imported detections).
 
 use image::{GrayImage, Luma, RgbImage};
 use serde::{Deserialize, Serialize};
