@@ -27,6 +27,11 @@ const STRIPES: usize = 8;
 /// synthetic benchmark: 0 gives 30–50 % higher EPE in flat regions.
 const STEP_DAMPING_PER_PIXEL: f32 = 10.0;
 
+/// A patch stops once its step is shorter than √this (0.03 px of its level). Finer steps
+/// mostly chase sensor noise: on the synthetic benchmark stopping here is 15 % faster than
+/// iterating to 10⁻⁴ px and lowers the EPE slightly.
+const CONVERGED_STEP_SQ: f32 = 1e-3;
+
 /// When a Gauss–Newton step raises the cost, it is halved up to this many times before the
 /// search stops. Coarse levels are aliased, so full steps often overshoot a minimum that a
 /// shorter step reaches.
@@ -317,7 +322,7 @@ impl<'a, const PS: usize> Template<'a, PS> {
                 step_x *= 0.5;
                 step_y *= 0.5;
             }
-            if step_x * step_x + step_y * step_y < 1e-8 {
+            if step_x * step_x + step_y * step_y < CONVERGED_STEP_SQ {
                 break;
             }
         }

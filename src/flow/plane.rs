@@ -96,23 +96,31 @@ impl Plane {
     pub fn downsample2(&self) -> Plane {
         let (w, h) = (self.width, self.height);
         let (cw, ch) = (w / 2, h / 2);
+        if cw == 0 || ch == 0 {
+            return Plane::zeros(cw, ch);
+        }
         // Horizontal pass: output column x blends input columns 2x−1 ..= 2x+2.
         let mut half = vec![0.0f32; cw * h];
-        for (y, out) in half.chunks_exact_mut(cw.max(1)).enumerate().take(h) {
+        for (y, out) in half.chunks_exact_mut(cw).enumerate() {
             let row = self.row(y);
             let at = |i: isize| row[i.clamp(0, w as isize - 1) as usize];
-            for (x, o) in out.iter_mut().enumerate() {
+            let edge = |x: usize| {
                 let i = 2 * x as isize;
-                *o = if x > 0 && 2 * x + 2 < w {
-                    let (a, b, c, d) = (row[2 * x - 1], row[2 * x], row[2 * x + 1], row[2 * x + 2]);
-                    0.125 * (a + 3.0 * b + 3.0 * c + d)
-                } else {
-                    0.125 * (at(i - 1) + 3.0 * at(i) + 3.0 * at(i + 1) + at(i + 2))
-                };
+                0.125 * (at(i - 1) + 3.0 * at(i) + 3.0 * at(i + 1) + at(i + 2))
+            };
+            // Interior outputs 1 ..= (w − 3) / 2 read columns 1 ..= w − 1 without clamping.
+            let last_interior = w.saturating_sub(3) / 2;
+            out[0] = edge(0);
+            for (x, o) in out.iter_mut().enumerate().take(last_interior + 1).skip(1) {
+                let s = &row[2 * x - 1..2 * x + 3];
+                *o = 0.125 * (s[0] + 3.0 * s[1] + 3.0 * s[2] + s[3]);
+            }
+            for x in (last_interior + 1).max(1)..cw {
+                out[x] = edge(x);
             }
         }
         let mut data = vec![0.0f32; cw * ch];
-        for (y, out) in data.chunks_exact_mut(cw.max(1)).enumerate().take(ch) {
+        for (y, out) in data.chunks_exact_mut(cw).enumerate() {
             let i = 2 * y as isize;
             let r = |k: isize| {
                 let k = k.clamp(0, h as isize - 1) as usize;
