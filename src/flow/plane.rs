@@ -96,23 +96,31 @@ impl Plane {
     pub fn downsample2(&self) -> Plane {
         let (w, h) = (self.width, self.height);
         let (cw, ch) = (w / 2, h / 2);
+        if cw == 0 || ch == 0 {
+            return Plane::zeros(cw, ch);
+        }
         // Horizontal pass: output column x blends input columns 2x−1 ..= 2x+2.
         let mut half = vec![0.0f32; cw * h];
-        for (y, out) in half.chunks_exact_mut(cw.max(1)).enumerate().take(h) {
+        for (y, out) in half.chunks_exact_mut(cw).enumerate() {
             let row = self.row(y);
             let at = |i: isize| row[i.clamp(0, w as isize - 1) as usize];
-            for (x, o) in out.iter_mut().enumerate() {
+            let edge = |x: usize| {
                 let i = 2 * x as isize;
-                *o = if x > 0 && 2 * x + 2 < w {
-                    let (a, b, c, d) = (row[2 * x - 1], row[2 * x], row[2 * x + 1], row[2 * x + 2]);
-                    0.125 * (a + 3.0 * b + 3.0 * c + d)
-                } else {
-                    0.125 * (at(i - 1) + 3.0 * at(i) + 3.0 * at(i + 1) + at(i + 2))
-                };
+                0.125 * (at(i - 1) + 3.0 * at(i) + 3.0 * at(i + 1) + at(i + 2))
+            };
+            // Interior outputs 1 ..= (w − 3) / 2 read columns 1 ..= w − 1 without clamping.
+            let last_interior = w.saturating_sub(3) / 2;
+            out[0] = edge(0);
+            for (x, o) in out.iter_mut().enumerate().take(last_interior + 1).skip(1) {
+                let s = &row[2 * x - 1..2 * x + 3];
+                *o = 0.125 * (s[0] + 3.0 * s[1] + 3.0 * s[2] + s[3]);
+            }
+            for x in (last_interior + 1).max(1)..cw {
+                out[x] = edge(x);
             }
         }
         let mut data = vec![0.0f32; cw * ch];
-        for (y, out) in data.chunks_exact_mut(cw.max(1)).enumerate().take(ch) {
+        for (y, out) in data.chunks_exact_mut(cw).enumerate() {
             let i = 2 * y as isize;
             let r = |k: isize| {
                 let k = k.clamp(0, h as isize - 1) as usize;
@@ -163,12 +171,12 @@ impl Plane {
         let max_y = (self.height - 1) as f32;
         let x = x.clamp(0.0, max_x);
         let y = y.clamp(0.0, max_y);
-        let x0 = x.floor();
-        let y0 = y.floor();
-        let fx = x - x0;
-        let fy = y - y0;
-        let x0 = x0 as usize;
-        let y0 = y0 as usize;
+        // Non-negative after clamping, so truncation is the floor (and cheaper than
+        // `floor`, a library call on baseline x86-64).
+        let x0 = x as usize;
+        let y0 = y as usize;
+        let fx = x - x0 as f32;
+        let fy = y - y0 as f32;
         let x1 = (x0 + 1).min(self.width - 1);
         let y1 = (y0 + 1).min(self.height - 1);
         let top = self.row(y0);
@@ -223,14 +231,14 @@ impl PaddedPlane {
     /// which extends the replicated border indefinitely.
     #[inline]
     pub fn sample(&self, x: f32, y: f32) -> f32 {
-        let lo = -(self.pad as f32);
-        let x = x.clamp(lo, (self.width + self.pad - 2) as f32);
-        let y = y.clamp(lo, (self.height + self.pad - 2) as f32);
-        let x0 = x.floor();
-        let y0 = y.floor();
-        let fx = x - x0;
-        let fy = y - y0;
-        let i = self.index(x0 as isize, y0 as isize);
+        // Padded coordinates are non-negative after clamping, so truncation is the floor.
+        let pad = self.pad as f32;
+        let x = x.clamp(-pad, (self.width + self.pad - 2) as f32) + pad;
+        let y = y.clamp(-pad, (self.height + self.pad - 2) as f32) + pad;
+        let (x0, y0) = (x as usize, y as usize);
+        let fx = x - x0 as f32;
+        let fy = y - y0 as f32;
+        let i = y0 * self.stride + x0;
         let top = self.data[i] + fx * (self.data[i + 1] - self.data[i]);
         let j = i + self.stride;
         let bottom = self.data[j] + fx * (self.data[j + 1] - self.data[j]);

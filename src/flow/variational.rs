@@ -154,11 +154,6 @@ fn span(block: &[f32], stride: usize, f: usize, off: usize, n: usize) -> &[f32] 
     &block[f * stride + off..f * stride + off + n]
 }
 
-/// Splits a row block into its field slices.
-fn fields_mut(block: &mut [f32], stride: usize) -> Vec<&mut [f32]> {
-    block.chunks_exact_mut(stride).collect()
-}
-
 /// Refines `flow` in place on the level images `i0` and `i1`.
 pub(crate) fn refine(i0: &Plane, i1: &PaddedPlane, flow: &mut DenseFlow, s: &RefineSettings) {
     let (w, h) = (i0.width, i0.height);
@@ -237,59 +232,56 @@ fn gradients_5pt(p: &Plane) -> (Plane, Plane) {
     let (w, h) = (p.width, p.height);
     let mut gx = Plane::zeros(w, h);
     let mut gy = Plane::zeros(w, h);
-    let k = 1.0 / 12.0;
+    let wide = simd::wide_vectors_available();
     gx.data
         .par_chunks_mut(w)
         .zip(gy.data.par_chunks_mut(w))
         .enumerate()
         .for_each(|(y, (gx_row, gy_row))| {
-            let r = |d: isize| p.row((y as isize + d).clamp(0, h as isize - 1) as usize);
-            let (m2, m1, p1, p2) = (r(-2), r(-1), r(1), r(2));
-            for (x, g) in gy_row.iter_mut().enumerate() {
-                *g = k * ((m2[x] - p2[x]) + 8.0 * (p1[x] - m1[x]));
+            #[cfg(target_arch = "x86_64")]
+            if wide {
+                // SAFETY: `wide_vectors_available` confirmed AVX2 on this CPU.
+                return unsafe { gradient_row_avx2(p, y, gx_row, gy_row) };
             }
-            let row = p.row(y);
-            let at = |x: isize| row[x.clamp(0, w as isize - 1) as usize];
-            for (x, g) in gx_row.iter_mut().enumerate() {
-                *g = if x >= 2 && x + 2 < w {
-                    k * ((row[x - 2] - row[x + 2]) + 8.0 * (row[x + 1] - row[x - 1]))
-                } else {
-                    let xi = x as isize;
-                    k * ((at(xi - 2) - at(xi + 2)) + 8.0 * (at(xi + 1) - at(xi - 1)))
-                };
-            }
+            gradient_row(p, y, gx_row, gy_row);
         });
     (gx, gy)
 }
 
-/// Horizontal and vertical derivatives by central differences, replicating the border.
-fn gradients_central(p: &Plane) -> (Plane, Plane) {
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn gradient_row_avx2(p: &Plane, y: usize, gx: &mut [f32], gy: &mut [f32]) {
+    gradient_row(p, y, gx, gy);
+}
+
+/// Row `y` of [`gradients_5pt`].
+#[inline(always)]
+fn gradient_row(p: &Plane, y: usize, gx: &mut [f32], gy: &mut [f32]) {
+    const K: f32 = 1.0 / 12.0;
     let (w, h) = (p.width, p.height);
-    let mut gx = Plane::zeros(w, h);
-    let mut gy = Plane::zeros(w, h);
-    gx.data
-        .par_chunks_mut(w)
-        .zip(gy.data.par_chunks_mut(w))
-        .enumerate()
-        .for_each(|(y, (gx_row, gy_row))| {
-            let up = p.row(y.saturating_sub(1));
-            let down = p.row((y + 1).min(h - 1));
-            let mid = p.row(y);
-            for x in 0..w {
-                gy_row[x] = 0.5 * (down[x] - up[x]);
-            }
-            gx_row[0] = 0.5 * (mid[1.min(w - 1)] - mid[0]);
-            for x in 1..w - 1 {
-                gx_row[x] = 0.5 * (mid[x + 1] - mid[x - 1]);
-            }
-            gx_row[w - 1] = 0.5 * (mid[w - 1] - mid[w.saturating_sub(2)]);
-        });
-    (gx, gy)
+    let r = |d: isize| p.row((y as isize + d).clamp(0, h as isize - 1) as usize);
+    let (m2, m1, p1, p2) = (r(-2), r(-1), r(1), r(2));
+    for (x, g) in gy.iter_mut().enumerate() {
+        *g = K * ((m2[x] - p2[x]) + 8.0 * (p1[x] - m1[x]));
+    }
+    let row = p.row(y);
+    if w > 4 {
+        for (x, g) in gx[2..w - 2].iter_mut().enumerate() {
+            // Output x + 2 reads columns x ..= x + 4.
+            *g = K * ((row[x] - row[x + 4]) + 8.0 * (row[x + 3] - row[x + 1]));
+        }
+    }
+    let at = |x: isize| row[x.clamp(0, w as isize - 1) as usize];
+    for x in (0..w.min(2)).chain(w.saturating_sub(2).max(2)..w) {
+        let xi = x as isize;
+        gx[x] = K * ((at(xi - 2) - at(xi + 2)) + 8.0 * (at(xi + 1) - at(xi - 1)));
+    }
 }
 
 /// Warps `i1` by the flow and computes the linearised data terms of every pixel.
 fn data_terms(i0: &Plane, i1: &PaddedPlane, flow: &DenseFlow) -> Checker {
     let (w, h) = (i0.width, i0.height);
+    let wide = simd::wide_vectors_available();
     let mut warped = Plane::zeros(w, h);
     let mut mask = Plane::zeros(w, h);
     warped
@@ -298,61 +290,146 @@ fn data_terms(i0: &Plane, i1: &PaddedPlane, flow: &DenseFlow) -> Checker {
         .zip(mask.data.par_chunks_mut(w))
         .enumerate()
         .for_each(|(y, (row, mask_row))| {
-            let (max_x, max_y) = ((w - 1) as f32, (h - 1) as f32);
-            for x in 0..w {
-                let px = x as f32 + flow.u.data[y * w + x];
-                let py = y as f32 + flow.v.data[y * w + x];
-                row[x] = i1.sample(px, py);
-                let inside = px >= 0.0 && py >= 0.0 && px <= max_x && py <= max_y;
-                mask_row[x] = if inside { 1.0 } else { 0.0 };
+            #[cfg(target_arch = "x86_64")]
+            if wide {
+                // SAFETY: `wide_vectors_available` confirmed AVX2 on this CPU.
+                return unsafe { warp_row_avx2(i1, flow, y, row, mask_row) };
             }
+            warp_row(i1, flow, y, row, mask_row);
         });
     let (i0x, i0y) = gradients_5pt(i0);
     let (i1x, i1y) = gradients_5pt(&warped);
-    let mean = |a: &Plane, b: &Plane| {
-        Plane::from_vec(
-            w,
-            h,
-            a.data
-                .iter()
-                .zip(&b.data)
-                .map(|(p, q)| 0.5 * (p + q))
-                .collect(),
-        )
+    let average = |a: &Plane, b: &Plane| {
+        let data = a.data.iter().zip(&b.data).map(|(p, q)| 0.5 * (p + q));
+        Plane::from_vec(w, h, data.collect())
     };
-    let ix = mean(&i0x, &i1x);
-    let iy = mean(&i0y, &i1y);
-    let (ixx, ixy_a) = gradients_central(&ix);
-    let (iyx_b, iyy) = gradients_central(&iy);
+    let first = FirstOrder {
+        i0,
+        warped: &warped,
+        mask: &mask,
+        ix: &average(&i0x, &i1x),
+        iy: &average(&i0y, &i1y),
+        gradients: [&i0x, &i0y, &i1x, &i1y],
+    };
     let mut terms = Checker::new(w, h, TERM_FIELDS);
+    let block = terms.block();
     let stride = terms.stride;
-    for c in 0..2 {
-        terms.rows_mut(c).for_each(|(y, block)| {
-            let f = fields_mut(block, stride);
-            let [fix, fiy, fiz, fixx, fixy, fiyy, fixz, fiyz, ft0, ftx, fty] =
-                <[&mut [f32]; TERM_FIELDS]>::try_from(f).expect("a block holds every field");
-            let row = y * w;
-            for (slot, x) in (shift(c, y)..w).step_by(2).enumerate() {
-                let (k, i) = (slot + 1, row + x);
-                let m = mask.data[i];
-                let (gx, gy) = (ix.data[i], iy.data[i]);
-                let (gxx, gyy) = (ixx.data[i], iyy.data[i]);
-                let gxy = 0.5 * (ixy_a.data[i] + iyx_b.data[i]);
-                fix[k] = gx;
-                fiy[k] = gy;
-                fiz[k] = warped.data[i] - i0.data[i];
-                fixx[k] = gxx;
-                fixy[k] = gxy;
-                fiyy[k] = gyy;
-                fixz[k] = i1x.data[i] - i0x.data[i];
-                fiyz[k] = i1y.data[i] - i0y.data[i];
-                ft0[k] = m / (gx * gx + gy * gy + ZETA_SQ);
-                ftx[k] = m / (gxx * gxx + gxy * gxy + ZETA_SQ);
-                fty[k] = m / (gxy * gxy + gyy * gyy + ZETA_SQ);
+    let [red, black] = &mut terms.colours;
+    red.par_chunks_mut(block)
+        .zip(black.par_chunks_mut(block))
+        .skip(1)
+        .take(h)
+        .enumerate()
+        .for_each(|(y, (red_row, black_row))| {
+            #[cfg(target_arch = "x86_64")]
+            if wide {
+                // SAFETY: `wide_vectors_available` confirmed AVX2 on this CPU.
+                return unsafe { terms_row_avx2(&first, y, stride, [red_row, black_row]) };
             }
+            terms_row(&first, y, stride, [red_row, black_row]);
         });
-    }
     terms
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn warp_row_avx2(
+    i1: &PaddedPlane,
+    flow: &DenseFlow,
+    y: usize,
+    out: &mut [f32],
+    mask: &mut [f32],
+) {
+    warp_row(i1, flow, y, out, mask);
+}
+
+/// Row `y` of the second frame warped back by the flow, and whether each pixel's target
+/// lies inside the frame.
+#[inline(always)]
+fn warp_row(i1: &PaddedPlane, flow: &DenseFlow, y: usize, out: &mut [f32], mask: &mut [f32]) {
+    let (w, h) = (flow.width(), flow.height());
+    let (max_x, max_y) = ((w - 1) as f32, (h - 1) as f32);
+    let (u, v) = (flow.u.row(y), flow.v.row(y));
+    for x in 0..w {
+        let px = x as f32 + u[x];
+        let py = y as f32 + v[x];
+        out[x] = i1.sample(px, py);
+        let inside = px >= 0.0 && py >= 0.0 && px <= max_x && py <= max_y;
+        mask[x] = if inside { 1.0 } else { 0.0 };
+    }
+}
+
+/// First-order quantities of a level, full layout.
+struct FirstOrder<'a> {
+    i0: &'a Plane,
+    warped: &'a Plane,
+    mask: &'a Plane,
+    /// Mean of both frames' x-derivatives.
+    ix: &'a Plane,
+    /// Mean of both frames' y-derivatives.
+    iy: &'a Plane,
+    /// x- and y-derivatives of `i0`, then of `warped`.
+    gradients: [&'a Plane; 4],
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn terms_row_avx2(first: &FirstOrder, y: usize, stride: usize, rows: [&mut [f32]; 2]) {
+    terms_row(first, y, stride, rows);
+}
+
+/// Row `y` of every data-term field, written into both colours' row blocks.
+#[inline(always)]
+fn terms_row(first: &FirstOrder, y: usize, stride: usize, rows: [&mut [f32]; 2]) {
+    let (w, h) = (first.i0.width, first.i0.height);
+    let (ix, iy) = (first.ix.row(y), first.iy.row(y));
+    let [i0x, i0y, i1x, i1y] = first.gradients.map(|g| g.row(y));
+    let (iy_up, iy_down) = (
+        first.iy.row(y.saturating_sub(1)),
+        first.iy.row((y + 1).min(h - 1)),
+    );
+    let (ix_up, ix_down) = (
+        first.ix.row(y.saturating_sub(1)),
+        first.ix.row((y + 1).min(h - 1)),
+    );
+    let (mask, warped, i0) = (first.mask.row(y), first.warped.row(y), first.i0.row(y));
+    let mut fields = vec![vec![0.0f32; w]; TERM_FIELDS];
+    {
+        let [fix, fiy, fiz, fixx, fixy, fiyy, fixz, fiyz, ft0, ftx, fty] =
+            <&mut [Vec<f32>; TERM_FIELDS]>::try_from(fields.as_mut_slice())
+                .expect("one vector per field");
+        // Central differences of the mean derivatives, replicating the border.
+        let side = |row: &[f32], x: usize| (row[x.saturating_sub(1)], row[(x + 1).min(w - 1)]);
+        for x in 0..w {
+            let (l, r) = side(ix, x);
+            let (lv, rv) = side(iy, x);
+            fixx[x] = 0.5 * (r - l);
+            // I_xy averages d(I_x)/dy and d(I_y)/dx.
+            fixy[x] = 0.5 * (0.5 * (ix_down[x] - ix_up[x]) + 0.5 * (rv - lv));
+            fiyy[x] = 0.5 * (iy_down[x] - iy_up[x]);
+        }
+        for x in 0..w {
+            let (gx, gy) = (ix[x], iy[x]);
+            let (gxx, gxy, gyy) = (fixx[x], fixy[x], fiyy[x]);
+            fix[x] = gx;
+            fiy[x] = gy;
+            fiz[x] = warped[x] - i0[x];
+            fixz[x] = i1x[x] - i0x[x];
+            fiyz[x] = i1y[x] - i0y[x];
+            ft0[x] = mask[x] / (gx * gx + gy * gy + ZETA_SQ);
+            ftx[x] = mask[x] / (gxx * gxx + gxy * gxy + ZETA_SQ);
+            fty[x] = mask[x] / (gxy * gxy + gyy * gyy + ZETA_SQ);
+        }
+    }
+    for (c, row) in rows.into_iter().enumerate() {
+        let first_x = shift(c, y);
+        for (f, values) in fields.iter().enumerate() {
+            let dst = &mut row[f * stride + 1..(f + 1) * stride];
+            for (d, v) in dst.iter_mut().zip(values[first_x..].iter().step_by(2)) {
+                *d = *v;
+            }
+        }
+    }
 }
 
 /// Robust smoothness weights `α Ψ'(|∇(U + du)|² + |∇(V + dv)|²)` of colour `c`, from
