@@ -125,3 +125,32 @@ fn generate_rejects_bad_sizes() {
     assert!(!out.status.success());
     assert!(text(&out.stderr).contains("WIDTHxHEIGHT"));
 }
+
+#[test]
+fn omitted_modalities_are_not_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = vadscope(&[
+        "generate",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--kind",
+        "normal",
+        "--frames",
+        "3",
+        "--size",
+        "64x48",
+        "--omit",
+        "depth,flow",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let scenario = std::fs::read_dir(dir.path())
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    assert!(scenario.join("RGB_IMG").is_dir());
+    assert!(scenario.join("SEMANTIC_IMG").is_dir());
+    assert!(!scenario.join("DEPTH_IMG").exists());
+    assert!(!scenario.join("OPTICAL_FLOW").exists());
+}

@@ -8,9 +8,10 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
+use vadscope::sequence::Modality;
 use vadscope::synth::{
     DatasetRequest, DomainChoice, KindChoice, Preset, ScenarioKind, WeatherChoice,
-    generate_scenario, plan_dataset,
+    generate_scenario_without, plan_dataset,
 };
 
 /// Options of `vadscope generate`.
@@ -44,9 +45,36 @@ pub struct GenerateArgs {
     /// Seed of the data set: the same seed and options give identical bytes.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Modalities to leave out of the written files, e.g. `--omit depth,flow` for a small
+    /// bundle (RGB frames, boxes, labels and metadata are always written).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    omit: Vec<OmitArg>,
     /// Replace scenario folders that already exist instead of stopping.
     #[arg(long)]
     force: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum OmitArg {
+    Semantic,
+    Instance,
+    Depth,
+    Flow,
+    Action,
+    Anomaly,
+}
+
+impl OmitArg {
+    fn modality(self) -> Modality {
+        match self {
+            OmitArg::Semantic => Modality::Semantic,
+            OmitArg::Instance => Modality::Instance,
+            OmitArg::Depth => Modality::Depth,
+            OmitArg::Flow => Modality::Flow,
+            OmitArg::Action => Modality::Action,
+            OmitArg::Anomaly => Modality::Anomaly,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -152,10 +180,11 @@ pub fn run(args: GenerateArgs) -> anyhow::Result<ExitCode> {
         .progress_chars("=> "),
     );
     bar.set_prefix("generating");
+    let omit: Vec<Modality> = args.omit.iter().map(|o| o.modality()).collect();
     let done = AtomicU64::new(0);
     for (i, spec) in specs.iter().enumerate() {
         bar.set_message(format!("scenario {}/{}: {}", i + 1, specs.len(), spec.name));
-        let dir = generate_scenario(spec, &args.out, |_| {
+        let dir = generate_scenario_without(spec, &args.out, &omit, |_| {
             done.fetch_add(1, Ordering::Relaxed);
             bar.set_position(done.load(Ordering::Relaxed));
         })

@@ -34,7 +34,7 @@ mod traffic;
 mod vehicle;
 
 pub use error::SynthError;
-pub use scenario::{GENERATOR_NAME, Scenario, generate_scenario};
+pub use scenario::{GENERATOR_NAME, Scenario, generate_scenario, generate_scenario_without};
 pub use spec::{
     DEFAULT_FRAMES, DEFAULT_HEIGHT, DEFAULT_WIDTH, DatasetPlan, DatasetRequest, DomainChoice,
     KindChoice, Preset, ScenarioKind, ScenarioSpec, WeatherChoice, domain_slug, plan_dataset,

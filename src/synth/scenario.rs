@@ -20,7 +20,9 @@ use super::scenery::Scenery;
 use super::spec::{ScenarioKind, ScenarioSpec};
 use super::traffic::{AnomalyWindow, FRAME_DT, Traffic, simulate};
 use crate::sequence::writer::ScenarioWriter;
-use crate::sequence::{CameraIntrinsics, Domain, FrameId, FrameRecord, FrameWindow, ScenarioMeta};
+use crate::sequence::{
+    CameraIntrinsics, Domain, FrameId, FrameRecord, FrameWindow, Modality, ScenarioMeta,
+};
 
 /// Generator name and version recorded in `scenario.json`.
 pub const GENERATOR_NAME: &str = concat!("vadscope-synth ", env!("CARGO_PKG_VERSION"));
@@ -251,6 +253,18 @@ pub fn generate_scenario(
     out_dir: &Path,
     on_frame: impl Fn(usize) + Sync,
 ) -> Result<PathBuf, SynthError> {
+    generate_scenario_without(spec, out_dir, &[], on_frame)
+}
+
+/// As [`generate_scenario`], but leaves the `omit`ted modalities out of the written files
+/// (for small bundles, e.g. no depth and no flow). RGB frames are always written; the
+/// rendered content of what is kept does not change.
+pub fn generate_scenario_without(
+    spec: &ScenarioSpec,
+    out_dir: &Path,
+    omit: &[Modality],
+    on_frame: impl Fn(usize) + Sync,
+) -> Result<PathBuf, SynthError> {
     let scenario = Scenario::build(spec)?;
     let dir = out_dir.join(format!("Scenario_{}", spec.name));
     let write_err = |source| SynthError::Write {
@@ -258,8 +272,19 @@ pub fn generate_scenario(
         source,
     };
     let writer = ScenarioWriter::create(&dir, &scenario.meta()).map_err(write_err)?;
-    scenario.render_all(|record| {
+    scenario.render_all(|mut record| {
         let k = record.id.0 as usize;
+        for modality in omit {
+            match modality {
+                Modality::Rgb => {}
+                Modality::Semantic => record.semantic = None,
+                Modality::Instance => record.instance = None,
+                Modality::Depth => record.depth_m = None,
+                Modality::Flow => record.flow = None,
+                Modality::Action => record.action = None,
+                Modality::Anomaly => record.anomaly = None,
+            }
+        }
         writer.write_frame(&record).map_err(write_err)?;
         on_frame(k);
         Ok(())
