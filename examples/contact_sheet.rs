@@ -15,7 +15,7 @@ use vadscope::synth::{Scenario, ScenarioKind, ScenarioSpec};
 
 const TILE_W: u32 = 384;
 const TILE_H: u32 = 256;
-const CAPTION_H: u32 = 22;
+const CAPTION_H: u32 = 26;
 const SEED: u64 = 11;
 
 fn main() -> anyhow::Result<()> {
@@ -72,7 +72,7 @@ fn main() -> anyhow::Result<()> {
         for (i, (_, caption)) in tiles.iter().enumerate() {
             let (x, y) = (
                 (i % columns) as u32 * TILE_W + 6,
-                (i / columns) as u32 * cell_h + 3,
+                (i / columns) as u32 * cell_h + 7,
             );
             root.draw_text(caption, &style, (x as i32, y as i32))?;
         }
@@ -116,8 +116,8 @@ fn ground_truth_tiles(record: &FrameRecord) -> Vec<(RgbImage, String)> {
     }
     if let Some(flow) = &record.flow {
         tiles.push((
-            colorize_flow(flow, FlowColorRange::Auto),
-            "OPTICAL_FLOW (exact, Middlebury colours)".into(),
+            colorize_flow(flow, FlowColorRange::Fixed(8.0)),
+            "OPTICAL_FLOW (exact; colour wheel, 8 px = full)".into(),
         ));
     }
     if let Some(depth) = &record.depth_m {
