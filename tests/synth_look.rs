@@ -18,15 +18,21 @@ fn env_or(key: &str, default: &str) -> String {
 /// Middlebury-style colour wheel: hue = direction, saturation = magnitude / max.
 fn flow_to_rgb(flow: &FlowField) -> image::RgbImage {
     let (w, h) = (flow.width, flow.height);
-    let mut max_mag = 1e-3f32;
+    let mut mags: Vec<f32> = Vec::new();
     for y in 0..h {
         for x in 0..w {
             let [u, v] = flow.at(x, y);
             if flow.is_valid(x, y) {
-                max_mag = max_mag.max((u * u + v * v).sqrt());
+                mags.push((u * u + v * v).sqrt());
             }
         }
     }
+    mags.sort_by(f32::total_cmp);
+    let max_mag = mags
+        .get(mags.len() * 95 / 100)
+        .copied()
+        .unwrap_or(1.0)
+        .max(1e-3);
     image::RgbImage::from_fn(w, h, |x, y| {
         if !flow.is_valid(x, y) {
             return image::Rgb([0, 0, 0]);

@@ -132,15 +132,20 @@ fn antialias_edges(view: &FrameView, px: &mut [Px]) {
     let h = view.cam.height_px as usize;
     // Parts count as separate surfaces so that kerb faces and vehicle parts are smoothed too.
     let keys: Vec<u32> = px.iter().map(|p| p.key ^ ((p.part as u32) << 24)).collect();
+    let lum: Vec<f32> = px.iter().map(|p| p.rgb.luminance()).collect();
     let cam = &view.cam;
     px.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         for (x, out) in row.iter_mut().enumerate() {
-            let k = keys[y * w + x];
-            let differs = (x > 0 && keys[y * w + x - 1] != k)
-                || (x + 1 < w && keys[y * w + x + 1] != k)
-                || (y > 0 && keys[(y - 1) * w + x] != k)
-                || (y + 1 < h && keys[(y + 1) * w + x] != k);
-            if !differs {
+            let i = y * w + x;
+            let (k, l) = (keys[i], lum[i]);
+            // Only boundaries that show: another surface with a visibly different brightness.
+            let visible =
+                |j: usize| keys[j] != k && (lum[j] - l).abs() > 0.04 * (lum[j] + l) + 0.002;
+            let edge = (x > 0 && visible(i - 1))
+                || (x + 1 < w && visible(i + 1))
+                || (y > 0 && visible(i - w))
+                || (y + 1 < h && visible(i + w));
+            if !edge {
                 continue;
             }
             let mut sum = out.rgb;

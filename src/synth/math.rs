@@ -192,12 +192,29 @@ pub fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
 
-/// `x.floor()` without a library call (the baseline x86-64 target has no rounding
-/// instruction, so `f32::floor` is a function call). Valid for |x| < 2^31.
+/// 1.5·2^23: adding it to an `f32` of magnitude below 2^22 rounds it to an integer, which
+/// then sits in the low mantissa bits.
+const ROUND_MAGIC: f32 = 12_582_912.0;
+
+/// `(x.floor(), x.floor() as i32)` without a library call or a saturating conversion (the
+/// baseline x86-64 target has no rounding instruction, so `f32::floor` is a function call).
+#[inline]
+pub fn floor_int(x: f32) -> (f32, i32) {
+    if x.abs() < 4_000_000.0 {
+        let b = x + ROUND_MAGIC;
+        let r = b - ROUND_MAGIC;
+        let i = b.to_bits() as i32 - ROUND_MAGIC.to_bits() as i32;
+        if r > x { (r - 1.0, i - 1) } else { (r, i) }
+    } else {
+        let f = x.floor();
+        (f, f as i32)
+    }
+}
+
+/// `x.floor()`; see [`floor_int`].
 #[inline]
 pub fn floor(x: f32) -> f32 {
-    let t = x as i32 as f32;
-    if t > x { t - 1.0 } else { t }
+    floor_int(x).0
 }
 
 /// Euclidean remainder of `x` by a positive `m`, in [0, m).
@@ -205,4 +222,23 @@ pub fn floor(x: f32) -> f32 {
 pub fn wrap(x: f32, m: f32) -> f32 {
     let r = x - m * floor(x / m);
     if r >= m { r - m } else { r.max(0.0) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_floor_matches_std() {
+        for i in -20_000..20_000 {
+            let x = i as f32 * 0.37 + 0.001 * (i % 7) as f32;
+            let (f, n) = floor_int(x);
+            assert_eq!(f, x.floor(), "{x}");
+            assert_eq!(n, x.floor() as i32, "{x}");
+        }
+        for x in [-3.0f32, -0.5, 0.0, 0.5, 2.999_999_8, 5.0e6, -7.3e6] {
+            assert_eq!(floor(x), x.floor(), "{x}");
+        }
+        assert!((wrap(-0.25, 2.0) - 1.75).abs() < 1e-6);
+    }
 }

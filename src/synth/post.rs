@@ -33,6 +33,20 @@ fn aces(x: f32) -> f32 {
     ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
 }
 
+/// Adds a Gaussian halo of standard deviations `(sx, sy)` pixels centred at `(u, v)`.
+fn splat(hdr: &mut [Rgb], w: i64, h: i64, (u, v): (f32, f32), (sx, sy): (f32, f32), colour: Rgb) {
+    let rx = (3.0 * sx).min(80.0) as i64;
+    let ry = (3.0 * sy).min(120.0) as i64;
+    let (cx, cy) = (u.floor() as i64, v.floor() as i64);
+    for y in (cy - ry).max(0)..=(cy + ry).min(h - 1) {
+        for x in (cx - rx).max(0)..=(cx + rx).min(w - 1) {
+            let dx = (x as f32 + 0.5 - u) / sx;
+            let dy = (y as f32 + 0.5 - v) / sy;
+            hdr[(y * w + x) as usize] += colour * (-0.5 * (dx * dx + dy * dy)).exp();
+        }
+    }
+}
+
 fn add_glows(world: &World, view: &FrameView, gbuf: &GBuffer, hdr: &mut [Rgb]) {
     let (w, h) = (gbuf.width as i64, gbuf.height as i64);
     let spread = match world.lighting.weather {
@@ -40,6 +54,26 @@ fn add_glows(world: &World, view: &FrameView, gbuf: &GBuffer, hdr: &mut [Rgb]) {
         Weather::Rain => 1.6,
         _ => 1.0,
     };
+    let wet = world.lighting.wetness;
+    // A wet road mirrors lights as long vertical streaks below them.
+    if wet > 0.0 {
+        for g in &view.glows {
+            let mirrored = super::math::V3::new(g.pos.x, g.pos.y, -g.pos.z);
+            let Some(q) = view.cam.project_relative(mirrored) else {
+                continue;
+            };
+            let (cx, cy) = (q.u.floor() as i64, q.v.floor() as i64);
+            if cx < 0 || cy < 0 || cx >= w || cy >= h {
+                continue;
+            }
+            if gbuf.key[(cy * w + cx) as usize] != super::render::KEY_GROUND {
+                continue;
+            }
+            let sigma = (g.size * view.cam.fx / q.z * 0.6).max(0.8);
+            let colour = g.colour * (0.35 * wet * (-q.z / world.lighting.haze_distance).exp());
+            splat(hdr, w, h, (q.u, q.v), (sigma * 1.2, sigma * 6.0), colour);
+        }
+    }
     for g in &view.glows {
         let Some(q) = view.cam.project_relative(g.pos) else {
             continue;

@@ -51,6 +51,8 @@ pub struct Prim {
     /// Screen rectangle of the geometry itself (binning may use a larger one that includes
     /// shadows); rays outside it cannot hit.
     pub rect: [f32; 4],
+    /// The camera's ray origin in the primitive's local frame (the same for every ray).
+    pub eye: V3,
 }
 
 impl Prim {
@@ -145,6 +147,8 @@ pub struct FrameView<'w> {
     tiles_y: usize,
     tile_start: Vec<u32>,
     tile_items: Vec<u32>,
+    vehicle_start: Vec<u32>,
+    vehicle_items: Vec<u32>,
     /// Night lights of this frame.
     pub lights: Vec<Light>,
     light_start: Vec<u32>,
@@ -280,6 +284,7 @@ impl<'w> FrameView<'w> {
                     s,
                     near,
                     rect: r,
+                    eye: (cam.origin() - origin).unrotate_z(c, s),
                 });
                 rects.push(r);
             }
@@ -330,10 +335,21 @@ impl<'w> FrameView<'w> {
                     s,
                     near,
                     rect: body_rect,
+                    eye: (cam.origin() - origin).unrotate_z(c, s),
                 });
                 rects.push(r);
             }
         }
+        // Vehicles again on their own, for shadow lookups from ground pixels.
+        let vehicle_rects: Vec<[f32; 4]> = rects
+            .iter()
+            .zip(&prims)
+            .map(|(r, p)| match p.what {
+                PrimRef::Vehicle(_) => *r,
+                PrimRef::Static(_) => [-10.0, -10.0, -5.0, -5.0],
+            })
+            .collect();
+        let (vehicle_start, vehicle_items) = bin(&vehicle_rects, tiles_x, tiles_y);
         let road_here = world.road.centerline.sample(ego.s);
         let (tile_start, mut tile_items) = bin(&rects, tiles_x, tiles_y);
         // Nearest first, so that tracing can stop at the first primitive beyond its hit.
@@ -359,6 +375,8 @@ impl<'w> FrameView<'w> {
             tiles_y,
             tile_start,
             tile_items,
+            vehicle_start,
+            vehicle_items,
             lights: Vec::new(),
             light_start: vec![0; tiles_x * tiles_y + 1],
             light_items: Vec::new(),
@@ -386,6 +404,12 @@ impl<'w> FrameView<'w> {
         view
     }
 
+    /// Unit tangent of the road at the camera.
+    #[inline]
+    pub fn road_tangent(&self) -> (f32, f32) {
+        self.road_tangent
+    }
+
     /// Tile index of continuous image point (u, v).
     #[inline]
     pub fn tile_of(&self, u: f32, v: f32) -> usize {
@@ -398,6 +422,13 @@ impl<'w> FrameView<'w> {
     #[inline]
     pub fn tile_prims(&self, tile: usize) -> &[u32] {
         &self.tile_items[self.tile_start[tile] as usize..self.tile_start[tile + 1] as usize]
+    }
+
+    /// Indices of the vehicle primitives of a tile (their shadows included).
+    #[inline]
+    pub fn tile_vehicles(&self, tile: usize) -> &[u32] {
+        &self.vehicle_items
+            [self.vehicle_start[tile] as usize..self.vehicle_start[tile + 1] as usize]
     }
 
     /// Light indices of a tile.
@@ -490,8 +521,16 @@ impl<'w> FrameView<'w> {
     /// [`FrameView::trace`] for a point known to lie in `tile`; `s_hint` is the arc length of
     /// a nearby ground point (speeds up the Frenet inversion, same result).
     pub fn trace_in_tile(&self, dir: V3, u: f32, v: f32, tile: usize, s_hint: Option<f32>) -> Hit {
-        let mut hit = self.ground(dir, s_hint).unwrap_or(Hit::sky(dir));
-        let o = self.cam.origin();
+        // The ground lies between the raised-sidewalk plane and the road plane along the
+        // ray; objects nearer than the former hide it, so it is only resolved when needed.
+        let h = self.cam.height;
+        let (t_floor, t_raised) = if dir.z < -1e-6 {
+            (h / -dir.z, (h - self.world.road.kerb_height) / -dir.z)
+        } else {
+            (f32::INFINITY, f32::INFINITY)
+        };
+        let mut hit = Hit::sky(dir);
+        hit.t = t_floor;
         for &pi in self.tile_prims(tile) {
             let prim = &self.prims[pi as usize];
             if prim.near >= hit.t {
@@ -501,7 +540,7 @@ impl<'w> FrameView<'w> {
             if u < r[0] || u > r[2] || v < r[1] || v > r[3] {
                 continue;
             }
-            let ol = (o - prim.origin).unrotate_z(prim.c, prim.s);
+            let ol = prim.eye;
             let dl = dir.unrotate_z(prim.c, prim.s);
             let found = match prim.what {
                 PrimRef::Static(i) => {
@@ -525,8 +564,17 @@ impl<'w> FrameView<'w> {
                 };
             }
         }
-        if hit.key == KEY_SKY && self.backdrop(dir) {
-            hit.key = KEY_BACKDROP;
+        if (hit.key == KEY_SKY || hit.t >= t_raised)
+            && let Some(g) = self.ground(dir, s_hint)
+            && (hit.key == KEY_SKY || g.t < hit.t)
+        {
+            return g;
+        }
+        if hit.key == KEY_SKY {
+            hit.t = f32::INFINITY;
+            if self.backdrop(dir) {
+                hit.key = KEY_BACKDROP;
+            }
         }
         hit
     }
@@ -709,23 +757,46 @@ pub fn panel_solid(obj: &StaticObject, x: f32, z: f32) -> bool {
 
 /// Ray-vehicle intersection in vehicle-local coordinates: (t, part, local normal).
 pub fn intersect_vehicle(m: &VehicleModel, o: V3, d: V3, t_max: f32) -> Option<(f32, u8, V3)> {
+    let inv = V3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
     let (lo, hi) = m.bounds();
-    slab(o, d, lo, hi, t_max)?;
+    overlaps(o, inv, lo, hi, t_max)?;
     let mut best: Option<(f32, u8, V3)> = None;
     let mut limit = t_max;
     for (k, part) in m.parts.iter().enumerate() {
+        if overlaps(o, inv, part.lo, part.hi, limit).is_none() {
+            continue;
+        }
         if let Some((t, plane)) = part.intersect(o, d, 1e-4, limit) {
             limit = t;
             best = Some((t, k as u8, part.planes[plane as usize].n));
         }
     }
     for (k, w) in m.wheels.iter().enumerate() {
+        let wlo = V3::new(w.x - w.r, w.y0, 0.0);
+        let whi = V3::new(w.x + w.r, w.y1, 2.0 * w.r);
+        if overlaps(o, inv, wlo, whi, limit).is_none() {
+            continue;
+        }
         if let Some((t, n)) = intersect_wheel(w, o, d, limit) {
             limit = t;
             best = Some((t, WHEEL_PART + k as u8, n));
         }
     }
     best
+}
+
+/// Whether the ray `o + t·d` (with `inv` = 1/d componentwise) passes through the box
+/// `[lo, hi]` for some `t` in `(0, t_max)`; returns the entry parameter.
+#[inline]
+fn overlaps(o: V3, inv: V3, lo: V3, hi: V3, t_max: f32) -> Option<f32> {
+    let (ax, bx) = ((lo.x - o.x) * inv.x, (hi.x - o.x) * inv.x);
+    let (ay, by) = ((lo.y - o.y) * inv.y, (hi.y - o.y) * inv.y);
+    let (az, bz) = ((lo.z - o.z) * inv.z, (hi.z - o.z) * inv.z);
+    // min/max that also behave when a component of d is zero (infinite inv): a NaN from
+    // 0·inf makes the comparison fail towards "overlap", which only costs a precise test.
+    let t0 = ax.min(bx).max(ay.min(by)).max(az.min(bz)).max(0.0);
+    let t1 = ax.max(bx).min(ay.max(by)).min(az.max(bz)).min(t_max);
+    (t0 <= t1).then_some(t0)
 }
 
 fn intersect_wheel(w: &super::vehicle::Wheel, o: V3, d: V3, t_max: f32) -> Option<(f32, V3)> {

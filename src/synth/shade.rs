@@ -374,9 +374,10 @@ fn ground(view: &FrameView, hit: &Hit, dn: V3, p_rel: V3, tile: usize) -> (Surfa
     let t = hit.t;
     let du = V3::new(cam.s, -cam.c, 0.0) * (t / cam.fx);
     let dv = V3::new(dir.x, dir.y, 0.0) * (t / (b * cam.fy));
-    let c = road.centerline.sample(s);
-    let along = |v: V3| (v.x * c.tx + v.y * c.ty).abs();
-    let across = |v: V3| (-v.x * c.ty + v.y * c.tx).abs();
+    // The road direction at the camera is close enough for a footprint estimate.
+    let (tx, ty) = view.road_tangent();
+    let along = |v: V3| (v.x * tx + v.y * ty).abs();
+    let across = |v: V3| (-v.x * ty + v.y * tx).abs();
     let fa = (TEXTURE_FILTER_PX * (along(du) + along(dv))).min(40.0);
     let fd = (TEXTURE_FILTER_PX * (across(du) + across(dv))).min(40.0);
     // Isotropic footprint for noise: geometric mean of the two axes.
@@ -471,7 +472,7 @@ fn ground(view: &FrameView, hit: &Hit, dn: V3, p_rel: V3, tile: usize) -> (Surfa
     let mut sun_vis = 1.0;
     // Vehicle shadows further away than this cover less than a pixel or two.
     let shadow_range = 25.0 * view.cam.fx / 192.0;
-    for &pi in view.tile_prims(tile) {
+    for &pi in view.tile_vehicles(tile) {
         if hit.t > shadow_range {
             break;
         }

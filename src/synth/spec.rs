@@ -457,3 +457,136 @@ mod tests {
         assert!(plan_dataset(&req).is_err());
     }
 }
+
+/// Error of parsing a command-line choice: the text and the accepted values.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown {what} {text:?}; expected one of: {expected}")]
+pub struct ParseChoiceError {
+    /// Which option was parsed.
+    pub what: &'static str,
+    /// The text given.
+    pub text: String,
+    /// The accepted values.
+    pub expected: &'static str,
+}
+
+fn parse_choice<T: Copy>(
+    what: &'static str,
+    expected: &'static str,
+    text: &str,
+    table: &[(&str, T)],
+) -> Result<T, ParseChoiceError> {
+    let lower = text.trim().to_ascii_lowercase();
+    table
+        .iter()
+        .find(|(name, _)| *name == lower)
+        .map(|(_, v)| *v)
+        .ok_or_else(|| ParseChoiceError {
+            what,
+            text: text.to_string(),
+            expected,
+        })
+}
+
+impl std::str::FromStr for KindChoice {
+    type Err = ParseChoiceError;
+
+    /// `normal`, `braking`, `turning`, `cut-in` or `mixed`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        parse_choice(
+            "kind",
+            "normal, braking, turning, cut-in, mixed",
+            s,
+            &[
+                ("normal", KindChoice::Only(ScenarioKind::Normal)),
+                ("braking", KindChoice::Only(ScenarioKind::Braking)),
+                ("turning", KindChoice::Only(ScenarioKind::Turning)),
+                ("cut-in", KindChoice::Only(ScenarioKind::CutIn)),
+                ("cutin", KindChoice::Only(ScenarioKind::CutIn)),
+                ("mixed", KindChoice::Mixed),
+            ],
+        )
+    }
+}
+
+impl std::str::FromStr for DomainChoice {
+    type Err = ParseChoiceError;
+
+    /// `city`, `highway` or `any`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        parse_choice(
+            "domain",
+            "city, highway, any",
+            s,
+            &[
+                ("city", DomainChoice::City),
+                ("highway", DomainChoice::Highway),
+                ("any", DomainChoice::Any),
+            ],
+        )
+    }
+}
+
+impl std::str::FromStr for WeatherChoice {
+    type Err = ParseChoiceError;
+
+    /// `sun`, `rain`, `fog`, `night` or `any`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        parse_choice(
+            "weather",
+            "sun, rain, fog, night, any",
+            s,
+            &[
+                ("sun", WeatherChoice::Sun),
+                ("rain", WeatherChoice::Rain),
+                ("fog", WeatherChoice::Fog),
+                ("night", WeatherChoice::Night),
+                ("any", WeatherChoice::Any),
+            ],
+        )
+    }
+}
+
+impl std::str::FromStr for Preset {
+    type Err = ParseChoiceError;
+
+    /// `train` or `test`.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        parse_choice(
+            "preset",
+            "train, test",
+            s,
+            &[("train", Preset::Train), ("test", Preset::Test)],
+        )
+    }
+}
+
+/// Parses an image size written `WxH` (e.g. `768x512`).
+pub fn parse_size(text: &str) -> Result<(u32, u32), ParseChoiceError> {
+    let bad = || ParseChoiceError {
+        what: "size",
+        text: text.to_string(),
+        expected: "WIDTHxHEIGHT, e.g. 768x512",
+    };
+    let (w, h) = text.trim().split_once(['x', 'X']).ok_or_else(bad)?;
+    Ok((w.parse().map_err(|_| bad())?, h.parse().map_err(|_| bad())?))
+}
+
+#[cfg(test)]
+mod parse_tests {
+    use super::*;
+
+    #[test]
+    fn command_line_choices_parse() {
+        assert_eq!("cut-in".parse(), Ok(KindChoice::Only(ScenarioKind::CutIn)));
+        assert_eq!("Mixed".parse(), Ok(KindChoice::Mixed));
+        assert_eq!("any".parse(), Ok(DomainChoice::Any));
+        assert_eq!("night".parse(), Ok(WeatherChoice::Night));
+        assert_eq!("test".parse(), Ok(Preset::Test));
+        assert_eq!(parse_size("768x512"), Ok((768, 512)));
+        assert!("snow".parse::<WeatherChoice>().is_err());
+        assert!(parse_size("768").is_err());
+        let err = "boat".parse::<KindChoice>().unwrap_err();
+        assert!(err.to_string().contains("cut-in"));
+    }
+}

@@ -7,7 +7,7 @@
 //! pixel, which is what makes the exact ground-truth flow reproduce the images under
 //! bilinear warping instead of fighting aliasing.
 
-use super::math::{floor, wrap};
+use super::math::{floor, floor_int, wrap};
 use super::rng::{hash2, hash32};
 
 /// Side of the table of random lattice values (noise repeats every 256 lattice cells, far
@@ -29,9 +29,8 @@ static TABLE_VALUES: [f32; TABLE * TABLE] = {
 /// Value noise on the unit lattice in [0, 1], smoothly interpolated.
 #[inline]
 pub fn value2(x: f32, y: f32, salt: u32) -> f32 {
-    let xf = floor(x);
-    let yf = floor(y);
-    let (ix, iy) = (xf as i32, yf as i32);
+    let (xf, ix) = floor_int(x);
+    let (yf, iy) = floor_int(y);
     let (fx, fy) = (x - xf, y - yf);
     let ux = fx * fx * (3.0 - 2.0 * fx);
     let uy = fy * fy * (3.0 - 2.0 * fy);

@@ -611,7 +611,7 @@ fn populate(spec: &ScenarioSpec, road: &mut Road, rng: &mut Rng) -> (Vec<Vehicle
         } else {
             (-150.0, ego_travel + 400.0)
         };
-        let (gap_lo, gap_hi) = if highway { (30.0, 110.0) } else { (15.0, 60.0) };
+        let (gap_lo, gap_hi) = if highway { (25.0, 85.0) } else { (15.0, 60.0) };
         let mut s = s_from + rng.range(0.0, gap_hi);
         while s < s_to {
             let body = pick_body(rng, domain);

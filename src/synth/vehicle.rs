@@ -43,6 +43,10 @@ pub struct Convex {
     pub count: u8,
     /// Surface kind.
     pub kind: PartKind,
+    /// Axis-aligned bounds (the box the part was cut from), for a quick rejection.
+    pub lo: V3,
+    /// Upper corner of the bounds.
+    pub hi: V3,
 }
 
 impl Convex {
@@ -52,6 +56,8 @@ impl Convex {
             planes: [Plane::default(); MAX_PLANES],
             count: 0,
             kind,
+            lo: min,
+            hi: max,
         };
         c.cut(V3::new(1.0, 0.0, 0.0), max);
         c.cut(V3::new(-1.0, 0.0, 0.0), min);
