@@ -33,7 +33,8 @@ impl DoubleConv {
         }
     }
 
-    fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+    /// Applies both conv–BN–ReLU stages.
+    pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
         let x = relu(self.bn1.forward(self.conv1.forward(x)));
         relu(self.bn2.forward(self.conv2.forward(x)))
     }
@@ -56,7 +57,8 @@ impl Down {
         }
     }
 
-    fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+    /// Halves the resolution of `x` and doubles its channels.
+    pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
         self.double.forward(self.conv.forward(x))
     }
 }
@@ -85,7 +87,8 @@ impl Up {
         }
     }
 
-    fn forward(&self, x: Tensor<4>, skip: Tensor<4>) -> Tensor<4> {
+    /// Upsamples `x` and fuses it with the encoder feature `skip` (ignored without concat).
+    pub fn forward(&self, x: Tensor<4>, skip: Tensor<4>) -> Tensor<4> {
         let up = self.up.forward(x);
         let fused = if self.concat {
             Tensor::cat(vec![skip, up], 1)

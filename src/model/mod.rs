@@ -16,6 +16,7 @@ pub mod losses;
 pub mod memae;
 pub mod rng;
 pub mod stats;
+pub mod stc;
 pub mod vunet;
 pub mod weights;
 

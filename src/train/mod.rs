@@ -6,6 +6,7 @@
 pub mod config;
 pub mod cubes;
 pub mod error;
+pub mod scenarios;
 pub mod stages;
 
 pub use config::{LrSchedule, StageConfig, TrainConfig};

@@ -1,0 +1,379 @@
+//! Spatio-temporal cubes (spec §2.3): for every box of frame i, the same rectangle cropped
+//! from frames i−t…i and from the flows stored at frames i−t+1…i, each resized to P×P
+//! bilinearly (flow values unchanged).
+//!
+//! Details as the reference:
+//! * the box of the **last** frame crops every frame and flow; its corners are rounded up
+//!   and the crop covers columns ⌈x1⌉…⌈x2⌉−1 and rows ⌈y1⌉…⌈y2⌉−1 (clamped to the image);
+//! * at the start of a scenario, indices before 0 repeat frame 0 (and its flow), and a
+//!   flow missing at frame 0 counts as zero motion (the reference's pair (0, 0));
+//! * resizing samples like OpenCV's `INTER_LINEAR` (half-pixel centres, edge clamping);
+//!   frames are rounded back to bytes as OpenCV does for 8-bit images.
+//!
+//! A flow field of another resolution than its frame is sampled with the box scaled to its
+//! grid and its values converted to frame pixels.
+
+use std::sync::Arc;
+
+use image::RgbImage;
+
+use crate::sequence::{BoxRecord, FlowField, Scenario};
+
+use super::error::ModelError;
+
+/// One cube: frames and flows of one box, channel-major.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cube {
+    /// RGB bytes [3·(t+1), P, P], frame i−t first, frame i (the target) last.
+    pub frames: Vec<u8>,
+    /// Flows [2·t, P, P] in native pixels, flow stored at frame i−t+1 first; (u, v) each.
+    pub flows: Vec<f32>,
+    /// Index of the box within its frame's box list.
+    pub box_index: usize,
+    /// The box that cropped the cube.
+    pub bbox: BoxRecord,
+}
+
+/// Frame indices of the cube of frame `index`: `index−t … index`, clamped at 0.
+pub fn frame_indices(index: usize, clip_hist: usize) -> Vec<usize> {
+    (0..=clip_hist)
+        .map(|k| (index + k).saturating_sub(clip_hist))
+        .collect()
+}
+
+/// Indices of the flows of the cube of frame `index`: stored at `index−t+1 … index`,
+/// clamped at 0.
+pub fn flow_indices(index: usize, clip_hist: usize) -> Vec<usize> {
+    (1..=clip_hist)
+        .map(|k| (index + k).saturating_sub(clip_hist))
+        .collect()
+}
+
+/// Pixel range [start, end) of a box edge pair after the reference's rounding, clamped to
+/// `0..size`.
+fn crop_range(lo: f32, hi: f32, size: u32) -> Option<(u32, u32)> {
+    if !(lo.is_finite() && hi.is_finite()) {
+        return None;
+    }
+    let start = lo.ceil().clamp(0.0, size as f32) as u32;
+    let end = hi.ceil().clamp(0.0, size as f32) as u32;
+    (end > start).then_some((start, end))
+}
+
+/// OpenCV `INTER_LINEAR` source position for output pixel `d` when resizing `len` → `out`:
+/// (left index, right index, weight of the right one).
+fn taps(d: usize, len: u32, out: usize) -> (usize, usize, f32) {
+    let scale = len as f64 / out as f64;
+    let f = (d as f64 + 0.5) * scale - 0.5;
+    let mut s = f.floor();
+    let mut w = f - s;
+    if s < 0.0 {
+        s = 0.0;
+        w = 0.0;
+    }
+    let last = (len - 1) as f64;
+    if s >= last {
+        s = last;
+        w = 0.0;
+    }
+    let s = s as usize;
+    (s, (s + 1).min(len as usize - 1), w as f32)
+}
+
+/// Bilinear resize of the crop `[x0, x1) × [y0, y1)` of an interleaved `channels`-channel
+/// image of `width` columns, read through `at(offset)`, into `out` planes of P×P.
+fn resize_crop(
+    crop: ((u32, u32), (u32, u32)),
+    width: u32,
+    channels: usize,
+    patch: usize,
+    at: impl Fn(usize) -> f32,
+    mut put: impl FnMut(usize, usize, usize, f32),
+) {
+    let ((x0, x1), (y0, y1)) = crop;
+    let xs: Vec<_> = (0..patch).map(|d| taps(d, x1 - x0, patch)).collect();
+    for dy in 0..patch {
+        let (ya, yb, wy) = taps(dy, y1 - y0, patch);
+        let row_a = (y0 as usize + ya) * width as usize;
+        let row_b = (y0 as usize + yb) * width as usize;
+        for (dx, &(xa, xb, wx)) in xs.iter().enumerate() {
+            let (ca, cb) = (x0 as usize + xa, x0 as usize + xb);
+            for c in 0..channels {
+                let p = |row: usize, col: usize| at((row + col) * channels + c);
+                let top = p(row_a, ca) * (1.0 - wx) + p(row_a, cb) * wx;
+                let bottom = p(row_b, ca) * (1.0 - wx) + p(row_b, cb) * wx;
+                put(c, dy, dx, top * (1.0 - wy) + bottom * wy);
+            }
+        }
+    }
+}
+
+/// Cube crop of `frame` into `out` (3 planes of P×P), rounding to bytes.
+fn crop_frame(frame: &RgbImage, crop: ((u32, u32), (u32, u32)), patch: usize, out: &mut [u8]) {
+    let raw = frame.as_raw();
+    resize_crop(
+        crop,
+        frame.width(),
+        3,
+        patch,
+        |i| raw[i] as f32,
+        |c, y, x, v| out[(c * patch + y) * patch + x] = (v + 0.5).floor().clamp(0.0, 255.0) as u8,
+    );
+}
+
+/// Cube crop of `flow` into `out` (2 planes of P×P); `scale` converts its values to frame
+/// pixels.
+fn crop_flow(
+    flow: &FlowField,
+    crop: ((u32, u32), (u32, u32)),
+    patch: usize,
+    scale: [f32; 2],
+    out: &mut [f32],
+) {
+    let uv = &flow.uv;
+    resize_crop(
+        crop,
+        flow.width,
+        2,
+        patch,
+        |i| uv[i],
+        |c, y, x, v| out[(c * patch + y) * patch + x] = v * scale[c],
+    );
+}
+
+/// Builds the cubes of frame `index`, one per box of `boxes` (the boxes of frame `index`)
+/// that keeps a non-empty crop. `frame(k)` and `flow(k)` fetch frame k and the flow stored
+/// at frame k (None if not stored).
+pub fn cubes_at(
+    index: usize,
+    boxes: &[BoxRecord],
+    clip_hist: usize,
+    patch: usize,
+    frame: &mut dyn FnMut(usize) -> Result<Arc<RgbImage>, ModelError>,
+    flow: &mut dyn FnMut(usize) -> Result<Option<Arc<FlowField>>, ModelError>,
+) -> Result<Vec<Cube>, ModelError> {
+    if boxes.is_empty() {
+        return Ok(Vec::new());
+    }
+    let frames = frame_indices(index, clip_hist)
+        .into_iter()
+        .map(&mut *frame)
+        .collect::<Result<Vec<_>, _>>()?;
+    let (width, height) = frames[clip_hist].dimensions();
+    if width == 0 || height == 0 {
+        return Err(ModelError::Cube(format!("frame {index} is empty")));
+    }
+    if let Some((k, f)) = frames
+        .iter()
+        .enumerate()
+        .find(|(_, f)| f.dimensions() != (width, height))
+    {
+        return Err(ModelError::Cube(format!(
+            "frame {} is {}×{} but frame {index} is {width}×{height}",
+            frame_indices(index, clip_hist)[k],
+            f.width(),
+            f.height()
+        )));
+    }
+    let mut flows = Vec::with_capacity(clip_hist);
+    for k in flow_indices(index, clip_hist) {
+        match flow(k)? {
+            Some(f)
+                if f.width > 0
+                    && f.height > 0
+                    && f.uv.len() == 2 * f.width as usize * f.height as usize =>
+            {
+                flows.push(Some(f))
+            }
+            Some(_) => {
+                return Err(ModelError::Cube(format!(
+                    "flow stored at frame {k} is malformed"
+                )));
+            }
+            None if k == 0 => flows.push(None),
+            None => {
+                return Err(ModelError::Cube(format!(
+                    "no flow stored at frame {k} (needed by the cubes of frame {index})"
+                )));
+            }
+        }
+    }
+
+    let area = patch * patch;
+    let mut cubes = Vec::with_capacity(boxes.len());
+    for (box_index, b) in boxes.iter().enumerate() {
+        let (Some(xr), Some(yr)) = (
+            crop_range(b.x1, b.x2, width),
+            crop_range(b.y1, b.y2, height),
+        ) else {
+            continue;
+        };
+        let mut cube_frames = vec![0u8; 3 * (clip_hist + 1) * area];
+        for (f, out) in frames.iter().zip(cube_frames.chunks_mut(3 * area)) {
+            crop_frame(f, (xr, yr), patch, out);
+        }
+        let mut cube_flows = vec![0f32; 2 * clip_hist * area];
+        for (f, out) in flows.iter().zip(cube_flows.chunks_mut(2 * area)) {
+            let Some(f) = f else { continue };
+            let (sx, sy) = (
+                f.width as f32 / width as f32,
+                f.height as f32 / height as f32,
+            );
+            let fxr = crop_range(b.x1 * sx, b.x2 * sx, f.width);
+            let fyr = crop_range(b.y1 * sy, b.y2 * sy, f.height);
+            if let (Some(fxr), Some(fyr)) = (fxr, fyr) {
+                crop_flow(f, (fxr, fyr), patch, [1.0 / sx, 1.0 / sy], out);
+            }
+        }
+        cubes.push(Cube {
+            frames: cube_frames,
+            flows: cube_flows,
+            box_index,
+            bbox: *b,
+        });
+    }
+    Ok(cubes)
+}
+
+/// The cubes of frame `index` of `scenario` for `boxes` (normally `scenario.boxes(index)`),
+/// from its frames and the flows it stores.
+pub fn scenario_cubes(
+    scenario: &Scenario,
+    index: usize,
+    boxes: &[BoxRecord],
+    clip_hist: usize,
+    patch: usize,
+) -> Result<Vec<Cube>, ModelError> {
+    let root = scenario.root().display().to_string();
+    let wrap = |e: crate::sequence::SequenceError| ModelError::Cube(format!("{root}: {e}"));
+    cubes_at(
+        index,
+        boxes,
+        clip_hist,
+        patch,
+        &mut |k| scenario.rgb(k).map_err(wrap),
+        &mut |k| scenario.flow(k).map_err(wrap),
+    )
+    .map_err(|e| match e {
+        ModelError::Cube(m) if !m.starts_with(&root) => ModelError::Cube(format!("{root}: {m}")),
+        other => other,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sequence::FrameId;
+
+    fn bbox(x1: f32, y1: f32, x2: f32, y2: f32) -> BoxRecord {
+        BoxRecord {
+            frame: FrameId(0),
+            track_id: 1,
+            x1,
+            y1,
+            x2,
+            y2,
+            class: 14,
+            score: 1.0,
+            anomalous: false,
+        }
+    }
+
+    /// Frame k: red = column, green = row, blue = 10·k.
+    fn frame(k: usize) -> Arc<RgbImage> {
+        Arc::new(RgbImage::from_fn(64, 48, |x, y| {
+            image::Rgb([x as u8, y as u8, 10 * k as u8])
+        }))
+    }
+
+    /// Flow stored at frame k: u = k, v = −k everywhere.
+    fn flow(k: usize) -> Arc<FlowField> {
+        let mut f = FlowField::zeros(64, 48);
+        for px in f.uv.chunks_mut(2) {
+            px[0] = k as f32;
+            px[1] = -(k as f32);
+        }
+        Arc::new(f)
+    }
+
+    #[test]
+    fn indices_pad_at_the_scenario_start() {
+        assert_eq!(frame_indices(2, 4), vec![0, 0, 0, 1, 2]);
+        assert_eq!(frame_indices(9, 4), vec![5, 6, 7, 8, 9]);
+        assert_eq!(flow_indices(2, 4), vec![0, 0, 1, 2]);
+        assert_eq!(flow_indices(9, 4), vec![6, 7, 8, 9]);
+    }
+
+    #[test]
+    fn cube_crops_the_last_frames_box_from_every_frame_and_flow() {
+        let boxes = [bbox(10.2, 5.0, 42.0, 37.0), bbox(70.0, 0.0, 90.0, 10.0)];
+        let cubes = cubes_at(6, &boxes, 4, 32, &mut |k| Ok(frame(k)), &mut |k| {
+            Ok(Some(flow(k)))
+        })
+        .expect("cubes");
+        // The second box lies outside the image: no cube.
+        assert_eq!(cubes.len(), 1);
+        let c = &cubes[0];
+        assert_eq!(c.box_index, 0);
+        // Crop columns 11..42 (31 px) and rows 5..37 (32 px: identity resize in y).
+        let red = |t: usize, y: usize, x: usize| c.frames[((3 * t) * 32 + y) * 32 + x];
+        let green = |t: usize, y: usize, x: usize| c.frames[((3 * t + 1) * 32 + y) * 32 + x];
+        let blue = |t: usize| c.frames[(3 * t + 2) * 32 * 32];
+        assert_eq!(red(0, 0, 0), 11);
+        assert_eq!(red(0, 0, 31), 41);
+        assert_eq!(green(4, 0, 0), 5);
+        assert_eq!(green(4, 31, 0), 36);
+        assert_eq!((blue(0), blue(4)), (20, 60), "frames 2 … 6");
+        // Flows stored at frames 3 … 6, values unchanged by the resize.
+        assert_eq!(c.flows[0], 3.0);
+        assert_eq!(c.flows[32 * 32], -3.0);
+        assert_eq!(c.flows[6 * 32 * 32 + 100], 6.0);
+    }
+
+    #[test]
+    fn missing_flow_is_zero_at_frame_zero_and_an_error_elsewhere() {
+        let boxes = [bbox(0.0, 0.0, 16.0, 16.0)];
+        let cubes = cubes_at(1, &boxes, 4, 8, &mut |k| Ok(frame(k)), &mut |k| {
+            Ok((k > 0).then(|| flow(k)))
+        })
+        .expect("cubes");
+        assert!(cubes[0].flows[..3 * 2 * 64].iter().all(|&v| v == 0.0));
+        assert_eq!(cubes[0].flows[3 * 2 * 64], 1.0);
+        let err = cubes_at(5, &boxes, 4, 8, &mut |k| Ok(frame(k)), &mut |k| {
+            Ok((k != 3).then(|| flow(k)))
+        })
+        .expect_err("missing flow");
+        assert!(err.to_string().contains("frame 3"), "{err}");
+    }
+
+    #[test]
+    fn half_resolution_flow_is_cropped_on_its_grid_and_rescaled() {
+        let mut small = FlowField::zeros(32, 24);
+        for px in small.uv.chunks_mut(2) {
+            px[0] = 1.0;
+            px[1] = 2.0;
+        }
+        let small = Arc::new(small);
+        let cubes = cubes_at(
+            4,
+            &[bbox(8.0, 8.0, 40.0, 40.0)],
+            4,
+            8,
+            &mut |k| Ok(frame(k)),
+            &mut |_| Ok(Some(small.clone())),
+        )
+        .expect("cubes");
+        assert_eq!(cubes[0].flows[0], 2.0, "u in frame pixels");
+        assert_eq!(cubes[0].flows[64], 4.0, "v in frame pixels");
+    }
+
+    #[test]
+    fn downscaling_matches_opencv_sampling_positions() {
+        // 4 → 2: output pixel 0 samples source 0.5 (half-way between pixels 0 and 1).
+        assert_eq!(taps(0, 4, 2), (0, 1, 0.5));
+        assert_eq!(taps(1, 4, 2), (2, 3, 0.5));
+        // 2 → 4: the first output pixel clamps to the left edge.
+        assert_eq!(taps(0, 2, 4), (0, 1, 0.0));
+        assert_eq!(taps(3, 2, 4), (1, 1, 0.0));
+    }
+}

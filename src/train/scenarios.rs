@@ -1,0 +1,158 @@
+//! The library side of `vadscope train`: gather the cubes of normal scenarios and run the
+//! three stages on them.
+//!
+//! Cubes use the ground-truth boxes of each frame (`Scenario::boxes`) and the flows the
+//! scenarios store; frames labelled anomalous and boxes flagged anomalous are left out, so
+//! only normal behaviour is learnt. Each scenario is its own group for the validation split.
+
+use std::path::{Path, PathBuf};
+
+use crate::model::ModelConfig;
+use crate::model::stc::scenario_cubes;
+use crate::sequence::{Scenario, discover_scenarios};
+
+use super::config::TrainConfig;
+use super::cubes::CubeSet;
+use super::error::TrainError;
+use super::stages::{TrainEvent, TrainReport, train};
+
+/// How cubes are taken from scenarios.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CubeExtraction {
+    /// Patch side P.
+    pub patch: usize,
+    /// Past frames per cube t.
+    pub clip_hist: usize,
+    /// Use every n-th frame as a cube target (1: all frames).
+    pub frame_stride: usize,
+    /// Leave out frames labelled anomalous and boxes flagged anomalous.
+    pub normal_only: bool,
+}
+
+impl CubeExtraction {
+    /// Every frame of every scenario, normal objects only, sized for `config`.
+    pub fn for_model(config: &ModelConfig) -> Self {
+        Self {
+            patch: config.patch_size,
+            clip_hist: config.clip_hist,
+            frame_stride: 1,
+            normal_only: true,
+        }
+    }
+}
+
+/// The scenario folders under each of `paths` (a scenario or a folder of scenarios).
+pub fn scenario_folders(paths: &[PathBuf]) -> Result<Vec<PathBuf>, TrainError> {
+    let mut folders = Vec::new();
+    for path in paths {
+        let found = discover_scenarios(path)
+            .map_err(|e| TrainError::file(path, format!("no scenarios: {e}")))?;
+        folders.extend(found);
+    }
+    folders.sort();
+    folders.dedup();
+    Ok(folders)
+}
+
+/// The cubes of the scenarios `folders`; `progress(done, total)` after each scenario.
+pub fn cubes_from_scenarios(
+    folders: &[PathBuf],
+    extraction: &CubeExtraction,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<CubeSet, TrainError> {
+    let mut set = CubeSet::new(extraction.patch, extraction.clip_hist);
+    for (group, folder) in folders.iter().enumerate() {
+        let scenario = Scenario::open(folder)
+            .map_err(|e| TrainError::file(folder, format!("cannot open scenario: {e}")))?;
+        add_scenario(&mut set, &scenario, group as u32, extraction)?;
+        progress(group + 1, folders.len());
+    }
+    Ok(set)
+}
+
+fn add_scenario(
+    set: &mut CubeSet,
+    scenario: &Scenario,
+    group: u32,
+    extraction: &CubeExtraction,
+) -> Result<(), TrainError> {
+    let labels = scenario.frame_labels();
+    for index in (0..scenario.len()).step_by(extraction.frame_stride.max(1)) {
+        if extraction.normal_only && labels.is_anomalous(index) {
+            continue;
+        }
+        let boxes: Vec<_> = scenario
+            .boxes(index)
+            .map_err(|e| TrainError::file(scenario.root(), e))?
+            .into_iter()
+            .filter(|b| !(extraction.normal_only && b.anomalous))
+            .collect();
+        let cubes = scenario_cubes(
+            scenario,
+            index,
+            &boxes,
+            extraction.clip_hist,
+            extraction.patch,
+        )?;
+        for cube in cubes {
+            set.push(&cube.frames, &cube.flows, group)?;
+        }
+    }
+    Ok(())
+}
+
+/// What `vadscope train` asks for.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrainRequest {
+    /// Scenario folders, or folders of scenarios, of normal driving.
+    pub data: Vec<PathBuf>,
+    /// Where checkpoints, the resume state and the final `model.safetensors` go.
+    pub out_dir: PathBuf,
+    /// The model to train.
+    pub model: ModelConfig,
+    /// The training settings.
+    pub train: TrainConfig,
+    /// Reuse (or write) the extracted cubes here, e.g. `<out_dir>/cubes.safetensors`.
+    pub cube_file: Option<PathBuf>,
+}
+
+/// Extracts (or loads) the cubes of `request.data` and trains on them; see
+/// [`train`](super::stages::train) for the stages, checkpoints and resume.
+pub fn train_from_scenarios(
+    request: &TrainRequest,
+    on_event: &mut dyn FnMut(&TrainEvent),
+    on_extract: &mut dyn FnMut(usize, usize),
+) -> Result<TrainReport, TrainError> {
+    let cubes = match &request.cube_file {
+        Some(path) if path.is_file() => CubeSet::load(path)?,
+        cube_file => {
+            let folders = scenario_folders(&request.data)?;
+            if folders.is_empty() {
+                return Err(TrainError::Data("no scenario folders given".into()));
+            }
+            let set = cubes_from_scenarios(
+                &folders,
+                &CubeExtraction::for_model(&request.model),
+                on_extract,
+            )?;
+            if let Some(path) = cube_file {
+                save_beside(path, &set)?;
+            }
+            set
+        }
+    };
+    train(
+        &request.model,
+        &request.train,
+        &cubes,
+        &request.out_dir,
+        on_event,
+    )
+}
+
+fn save_beside(path: &Path, set: &CubeSet) -> Result<(), TrainError> {
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).map_err(|e| TrainError::io(parent, e))?;
+    }
+    set.save(path)
+}

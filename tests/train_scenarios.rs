@@ -1,0 +1,99 @@
+//! Cubes gathered from scenarios on disk for training: one cube per normal box and frame,
+//! frames and flows cropped with the box of the target frame, anomalous frames and boxes
+//! left out, one split group per scenario.
+
+use std::path::{Path, PathBuf};
+
+use image::RgbImage;
+
+use vadscope::model::ModelConfig;
+use vadscope::sequence::{
+    BoxRecord, FlowField, FrameId, FrameRecord, ScenarioMeta, ScenarioWriter,
+};
+use vadscope::train::scenarios::{CubeExtraction, cubes_from_scenarios, scenario_folders};
+
+/// A 6-frame scenario: frame k is a gradient whose blue channel is 40·k; the flow stored at
+/// frame k ≥ 1 is (k, 0.5); one normal box per frame, plus an anomalous one in frame 5, and
+/// frame 4 labelled anomalous.
+fn write_scenario(dir: &Path) -> PathBuf {
+    let writer = ScenarioWriter::create(dir, &ScenarioMeta::default()).expect("writer");
+    for k in 0..6u64 {
+        let rgb = RgbImage::from_fn(48, 40, |x, y| {
+            image::Rgb([x as u8 * 4, y as u8 * 5, 40 * k as u8])
+        });
+        let flow = (k > 0).then(|| {
+            let mut f = FlowField::zeros(48, 40);
+            for px in f.uv.chunks_mut(2) {
+                px[0] = k as f32;
+                px[1] = 0.5;
+            }
+            f
+        });
+        let bbox = |track, anomalous| BoxRecord {
+            frame: FrameId(k),
+            track_id: track,
+            x1: 8.0,
+            y1: 4.0,
+            x2: 40.0,
+            y2: 36.0,
+            class: 14,
+            score: 1.0,
+            anomalous,
+        };
+        let mut boxes = vec![bbox(1, false)];
+        if k == 5 {
+            boxes.push(bbox(2, true));
+        }
+        let record = FrameRecord {
+            id: FrameId(k),
+            rgb,
+            semantic: None,
+            instance: None,
+            depth_m: None,
+            flow,
+            action: None,
+            anomaly: None,
+            boxes,
+            anomalous: Some(k == 4),
+        };
+        writer.write_frame(&record).expect("frame");
+    }
+    writer.finish().expect("finish")
+}
+
+#[test]
+fn cubes_come_from_normal_frames_and_boxes_of_each_scenario() {
+    let root = tempfile::tempdir().expect("temp dir");
+    write_scenario(&root.path().join("Scenario_a"));
+    write_scenario(&root.path().join("Scenario_b"));
+    let folders = scenario_folders(&[root.path().to_path_buf()]).expect("discover");
+    assert_eq!(folders.len(), 2);
+
+    let mut config = ModelConfig::parity();
+    config.patch_size = 16;
+    let mut calls = Vec::new();
+    let set = cubes_from_scenarios(
+        &folders,
+        &CubeExtraction::for_model(&config),
+        &mut |d, t| calls.push((d, t)),
+    )
+    .expect("cubes");
+    assert_eq!(calls, vec![(1, 2), (2, 2)]);
+    // Frames 0, 1, 2, 3, 5 (4 is anomalous), one normal box each, two scenarios.
+    assert_eq!(set.len(), 10);
+    assert_eq!((set.group_of(0), set.group_of(9)), (0, 1));
+
+    // Cube of frame 5 (the last of scenario a): frames 1..5, flows stored at 2..5.
+    let cube = 4;
+    let area = 16 * 16;
+    let blue = |t: usize| set.frames_of(cube)[(3 * t + 2) * area];
+    assert_eq!((blue(0), blue(4)), (40, 200));
+    let flows = set.flows_of(cube);
+    assert!((flows[0] - 2.0).abs() < 0.01, "KITTI PNG flow quantisation");
+    assert!((flows[area] - 0.5).abs() < 0.01);
+    assert!((flows[6 * area] - 5.0).abs() < 0.01);
+
+    // Cube of frame 0: all frames repeat frame 0, and its missing flow is zero motion.
+    assert_eq!(set.frames_of(0)[2 * area], 0);
+    assert!(set.flows_of(0).iter().all(|&v| v == 0.0));
+}
