@@ -81,6 +81,7 @@ fn stored_estimated_and_fallback_flows() {
     );
 
     assert_eq!(FlowSource::Stored.key(), "stored");
+    assert_eq!(FlowSource::default().key(), "stored-dis-medium");
     assert_eq!(FlowSource::Estimated(DisPreset::Medium).key(), "dis-medium");
     assert_eq!(
         FlowSource::StoredElseEstimated(DisPreset::Fast).key(),

@@ -28,6 +28,14 @@ pub enum FlowSource {
     StoredElseEstimated(DisPreset),
 }
 
+impl Default for FlowSource {
+    /// Stored flows where the scenario has them, else DIS at the `medium` preset (the
+    /// sample scenarios ship without flow).
+    fn default() -> Self {
+        Self::StoredElseEstimated(DisPreset::Medium)
+    }
+}
+
 impl FlowSource {
     /// A short stable name for cache file names.
     pub fn key(&self) -> String {
