@@ -4,5 +4,10 @@
 //! The library is GUI-free below `app`; see `ARCHITECTURE.md` for the module map and the
 //! one-way data flow.
 
+pub mod eval;
 pub mod flow;
+pub mod model;
+pub mod score;
 pub mod sequence;
+pub mod synth;
+pub mod train;

@@ -68,3 +68,61 @@ impl SequenceError {
         }
     }
 }
+
+impl Clone for SequenceError {
+    /// Clones the error; an I/O source is rebuilt from its kind and message, because
+    /// `std::io::Error` itself cannot be cloned. Lets lazily loaded files report the same
+    /// error on every access.
+    fn clone(&self) -> Self {
+        match self {
+            Self::Io { path, source } => Self::Io {
+                path: path.clone(),
+                source: std::io::Error::new(source.kind(), source.to_string()),
+            },
+            Self::Image { path, message } => Self::Image {
+                path: path.clone(),
+                message: message.clone(),
+            },
+            Self::Format { path, problem } => Self::Format {
+                path: path.clone(),
+                problem: problem.clone(),
+            },
+            Self::Line {
+                path,
+                line,
+                problem,
+            } => Self::Line {
+                path: path.clone(),
+                line: *line,
+                problem: problem.clone(),
+            },
+            Self::NotAScenario { path, problem } => Self::NotAScenario {
+                path: path.clone(),
+                problem: problem.clone(),
+            },
+        }
+    }
+}
+
+impl SequenceError {
+    /// The problem in words, without the path (which [`SequenceError::path`] gives).
+    pub fn problem(&self) -> String {
+        match self {
+            Self::Io { source, .. } => source.to_string(),
+            Self::Image { message, .. } => format!("cannot decode image: {message}"),
+            Self::Format { problem, .. } | Self::NotAScenario { problem, .. } => problem.clone(),
+            Self::Line { line, problem, .. } => format!("line {line}: {problem}"),
+        }
+    }
+
+    /// The file or folder the error is about.
+    pub fn path(&self) -> &std::path::Path {
+        match self {
+            Self::Io { path, .. }
+            | Self::Image { path, .. }
+            | Self::Format { path, .. }
+            | Self::Line { path, .. }
+            | Self::NotAScenario { path, .. } => path,
+        }
+    }
+}

@@ -1,0 +1,540 @@
+//! Building blocks shared by ML-MemAE-SC and the CVAE: PyTorch-semantics BatchNorm, plain
+//! and transposed convolutions with the reference initialisations, the weight-normalised
+//! `NormConv2d`, VUNet residual blocks, sub-pixel up/down sampling and the TensorFlow-order
+//! space-to-depth / depth-to-space.
+
+use burn::module::{Flag, Module, Param, RunningState};
+use burn::nn::Initializer;
+use burn::nn::PaddingConfig2d;
+use burn::nn::conv::{Conv2d, Conv2dConfig, ConvTranspose2d, ConvTranspose2dConfig};
+use burn::tensor::activation::elu;
+use burn::tensor::module::{batch_norm_train, conv2d};
+use burn::tensor::ops::ConvOptions;
+use burn::tensor::{Device, Tensor, TensorData};
+
+use super::rng::NoiseRng;
+
+/// A parameter holding `values` with `shape` on `device`.
+pub(crate) fn param<const D: usize>(
+    values: Vec<f32>,
+    shape: [usize; D],
+    device: &Device,
+) -> Param<Tensor<D>> {
+    Param::from_tensor(tensor(values, shape, device))
+}
+
+/// A tensor holding `values` with `shape` on `device`.
+pub(crate) fn tensor<const D: usize>(
+    values: Vec<f32>,
+    shape: [usize; D],
+    device: &Device,
+) -> Tensor<D> {
+    Tensor::from_data(TensorData::new(values, shape), device)
+}
+
+/// Gain of PyTorch's `kaiming_normal_` for a leaky ReLU of slope `a`.
+fn leaky_gain(a: f64) -> f64 {
+    (2.0 / (1.0 + a * a)).sqrt()
+}
+
+/// BatchNorm over channels with PyTorch's semantics: normalisation by the biased batch
+/// variance, running variance updated with the **unbiased** one (burn's `BatchNorm` uses the
+/// biased variance for both, which drifts from reference checkpoints).
+///
+/// Training behaviour (batch statistics, running-stat update) runs when the input lives on
+/// an autodiff device and the `training` flag is on, as burn's own layers decide;
+/// [`Module::freeze`] or [`Module::valid`] switch it to running statistics.
+#[derive(Module, Debug)]
+pub struct BatchNorm2d {
+    /// Scale γ (`weight` in PyTorch).
+    pub weight: Param<Tensor<1>>,
+    /// Shift β (`bias` in PyTorch).
+    pub bias: Param<Tensor<1>>,
+    /// Running mean.
+    pub running_mean: RunningState<Tensor<1>>,
+    /// Running (unbiased) variance.
+    pub running_var: RunningState<Tensor<1>>,
+    /// Whether training behaviour is enabled.
+    pub training: Param<Flag>,
+    /// Running-stat momentum (0.1).
+    pub momentum: f64,
+    /// Variance epsilon (1e-5).
+    pub eps: f64,
+}
+
+impl BatchNorm2d {
+    /// The reference (`weights_init_kaiming`) initialisation: γ ~ N(1, 0.02), β = 0, running
+    /// mean 0, running variance 1.
+    pub fn new(channels: usize, device: &Device, rng: &mut NoiseRng) -> Self {
+        Self {
+            weight: param(rng.normal_vec(channels, 1.0, 0.02), [channels], device),
+            bias: param(vec![0.0; channels], [channels], device),
+            running_mean: RunningState::new(Tensor::zeros([channels], device)),
+            running_var: RunningState::new(Tensor::ones([channels], device)),
+            training: Param::from_bool(true),
+            momentum: 0.1,
+            eps: 1e-5,
+        }
+    }
+
+    /// Normalises `x` [B, C, H, W].
+    pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        if x.device().is_autodiff() && self.training.is_enabled() {
+            self.forward_train(x)
+        } else {
+            let device = x.device();
+            burn::tensor::module::batch_norm(
+                x,
+                self.weight.val(),
+                self.bias.val(),
+                self.running_mean.value_sync().to_device(&device),
+                self.running_var.value_sync().to_device(&device),
+                self.eps,
+            )
+        }
+    }
+
+    fn forward_train(&self, x: Tensor<4>) -> Tensor<4> {
+        let [b, _, h, w] = x.dims();
+        let count = (b * h * w) as f64;
+        let device = x.device();
+        let out = batch_norm_train(x, self.weight.val(), self.bias.val(), self.eps);
+        // PyTorch raises for a single value per channel; keeping the biased value there
+        // avoids an infinite running variance instead.
+        let bessel = if count > 1.0 {
+            count / (count - 1.0)
+        } else {
+            1.0
+        };
+        let m = self.momentum;
+        let mean = self.running_mean.value_sync().to_device(&device);
+        let var = self.running_var.value_sync().to_device(&device);
+        let mean = mean
+            .mul_scalar(1.0 - m)
+            .add(out.mean.detach().mul_scalar(m));
+        let var = var
+            .mul_scalar(1.0 - m)
+            .add(out.variance.detach().mul_scalar(m * bessel));
+        self.running_mean.update(mean.detach());
+        self.running_var.update(var.detach());
+        out.output
+    }
+}
+
+/// A 2D convolution with bias, initialised as the reference's ML-MemAE-SC convs:
+/// kaiming-normal weights (a = 0.1, fan-in) and PyTorch's default uniform bias.
+pub fn kaiming_conv(
+    channels: [usize; 2],
+    kernel: usize,
+    stride: usize,
+    padding: usize,
+    device: &Device,
+    rng: &mut NoiseRng,
+) -> Conv2d {
+    let [cin, cout] = channels;
+    let fan_in = (cin * kernel * kernel) as f64;
+    let mut conv = Conv2dConfig::new(channels, [kernel, kernel])
+        .with_stride([stride, stride])
+        .with_padding(PaddingConfig2d::Explicit(
+            padding, padding, padding, padding,
+        ))
+        .with_initializer(Initializer::Zeros)
+        .init(device);
+    let std = leaky_gain(0.1) / fan_in.sqrt();
+    conv.weight = param(
+        rng.normal_vec(cout * cin * kernel * kernel, 0.0, std),
+        [cout, cin, kernel, kernel],
+        device,
+    );
+    let bound = 1.0 / fan_in.sqrt();
+    conv.bias = Some(param(rng.uniform_vec(cout, -bound, bound), [cout], device));
+    conv
+}
+
+/// The ×2 upsampling ConvTranspose2d of ML-MemAE-SC (k3, s2, p1, output padding 1), with
+/// PyTorch's default init (which the reference keeps: its kaiming init skips ConvTranspose).
+pub fn upsampling_conv(
+    channels: [usize; 2],
+    device: &Device,
+    rng: &mut NoiseRng,
+) -> ConvTranspose2d {
+    let [cin, cout] = channels;
+    let mut conv = ConvTranspose2dConfig::new(channels, [3, 3])
+        .with_stride([2, 2])
+        .with_padding([1, 1])
+        .with_padding_out([1, 1])
+        .with_initializer(Initializer::Zeros)
+        .init(device);
+    // PyTorch computes the fan-in of a transposed conv from weight dim 1 (its output channels).
+    let bound = 1.0 / ((cout * 9) as f64).sqrt();
+    conv.weight = param(
+        rng.uniform_vec(cin * cout * 9, -bound, bound),
+        [cin, cout, 3, 3],
+        device,
+    );
+    conv.bias = Some(param(rng.uniform_vec(cout, -bound, bound), [cout], device));
+    conv
+}
+
+/// A weight-normalised convolution (PyTorch `weight_norm(Conv2d)`): the effective weight is
+/// `weight_g · weight_v / ‖weight_v‖`, the norm taken per output channel over (C_in, k, k).
+#[derive(Module, Debug)]
+pub struct WeightNormConv2d {
+    /// Magnitude g, [C_out, 1, 1, 1].
+    pub weight_g: Param<Tensor<4>>,
+    /// Direction v, [C_out, C_in, k, k].
+    pub weight_v: Param<Tensor<4>>,
+    /// Bias, [C_out].
+    pub bias: Param<Tensor<1>>,
+    /// Stride.
+    pub stride: usize,
+    /// Zero padding on every side.
+    pub padding: usize,
+}
+
+impl WeightNormConv2d {
+    /// The effective convolution weight g·v/‖v‖.
+    pub fn weight(&self) -> Tensor<4> {
+        let v = self.weight_v.val();
+        let norm = v.clone().square().sum_dim(1).sum_dim(2).sum_dim(3).sqrt();
+        v * (self.weight_g.val() / norm)
+    }
+
+    fn options(&self) -> ConvOptions<2> {
+        ConvOptions::new(
+            [self.stride, self.stride],
+            [self.padding, self.padding],
+            [1, 1],
+            1,
+        )
+    }
+}
+
+/// VUNet's `NormConv2d`: a weight-normalised convolution followed by a learned per-channel
+/// affine, `gamma · conv(x) + beta`.
+#[derive(Module, Debug)]
+pub struct NormConv2d {
+    /// Per-channel shift, [1, C, 1, 1].
+    pub beta: Param<Tensor<4>>,
+    /// Per-channel scale, [1, C, 1, 1].
+    pub gamma: Param<Tensor<4>>,
+    /// The weight-normalised convolution.
+    pub conv: WeightNormConv2d,
+    /// γ, β and the weight norm folded into one conv, set by [`NormConv2d::folded`] for
+    /// inference. Used only on non-autodiff devices; weights must not change afterwards.
+    #[module(skip)]
+    pub cache: Option<FoldedConv>,
+}
+
+impl NormConv2d {
+    /// PyTorch's default conv init (uniform ±1/√fan_in for v and bias), g = ‖v‖ as
+    /// `weight_norm` sets it, γ = 1, β = 0. The reference's kaiming init does not reach these
+    /// layers (spec §5), so this is what it trains from.
+    pub fn new(
+        cin: usize,
+        cout: usize,
+        kernel: usize,
+        stride: usize,
+        padding: usize,
+        device: &Device,
+        rng: &mut NoiseRng,
+    ) -> Self {
+        let fan = cin * kernel * kernel;
+        let bound = 1.0 / (fan as f64).sqrt();
+        let v = rng.uniform_vec(cout * fan, -bound, bound);
+        let g: Vec<f32> = v
+            .chunks(fan)
+            .map(|row| row.iter().map(|x| x * x).sum::<f32>().sqrt())
+            .collect();
+        Self {
+            beta: param(vec![0.0; cout], [1, cout, 1, 1], device),
+            gamma: param(vec![1.0; cout], [1, cout, 1, 1], device),
+            conv: WeightNormConv2d {
+                weight_g: param(g, [cout, 1, 1, 1], device),
+                weight_v: param(v, [cout, cin, kernel, kernel], device),
+                bias: param(rng.uniform_vec(cout, -bound, bound), [cout], device),
+                stride,
+                padding,
+            },
+            cache: None,
+        }
+    }
+
+    /// Applies the layer to `x` [B, C_in, H, W].
+    pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        if let Some(cache) = &self.cache
+            && !x.device().is_autodiff()
+        {
+            return cache.forward(x);
+        }
+        let out = conv2d(
+            x,
+            self.conv.weight(),
+            Some(self.conv.bias.val()),
+            self.conv.options(),
+        );
+        out * self.gamma.val() + self.beta.val()
+    }
+
+    /// The layer with γ and β folded into a plain weight and bias (same outputs, one conv):
+    /// for inference, where the weights do not change between calls.
+    pub fn fold(&self) -> FoldedConv {
+        let gamma = self.gamma.val();
+        let [_, cout, _, _] = gamma.dims();
+        let gamma_col = gamma.clone().reshape([cout, 1, 1, 1]);
+        let weight = self.conv.weight() * gamma_col;
+        let bias = self.conv.bias.val() * gamma.reshape([cout]) + self.beta.val().reshape([cout]);
+        FoldedConv {
+            weight,
+            bias,
+            options: self.conv.options(),
+        }
+    }
+
+    /// The layer with its folded form cached for inference (see [`NormConv2d::cache`]).
+    pub fn folded(self) -> Self {
+        let cache = Some(self.fold());
+        Self { cache, ..self }
+    }
+}
+
+/// A [`NormConv2d`] with everything folded into one weight and bias.
+#[derive(Debug, Clone)]
+pub struct FoldedConv {
+    weight: Tensor<4>,
+    bias: Tensor<1>,
+    options: ConvOptions<2>,
+}
+
+impl FoldedConv {
+    /// Applies the folded convolution.
+    pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        conv2d(
+            x,
+            self.weight.clone(),
+            Some(self.bias.clone()),
+            self.options.clone(),
+        )
+    }
+}
+
+/// Inverted dropout with a mask from `noise`; the identity when `noise` is `None` (eval) or
+/// `prob` is 0.
+pub(crate) fn dropout(x: Tensor<4>, prob: f64, noise: Option<&mut NoiseRng>) -> Tensor<4> {
+    match noise {
+        Some(rng) if prob > 0.0 => {
+            let dims = x.dims();
+            let n = dims.iter().product();
+            let mask = tensor(rng.dropout_mask(n, prob), dims, &x.device());
+            x * mask
+        }
+        _ => x,
+    }
+}
+
+/// VUNet residual block without skip input: `x + conv3×3(dropout(elu(x)))`.
+#[derive(Module, Debug)]
+pub struct ResBlock {
+    /// The 3×3 convolution C→C.
+    pub conv2d: NormConv2d,
+    /// Dropout probability.
+    pub dropout: f64,
+}
+
+impl ResBlock {
+    /// The block with its convolution folded for inference.
+    pub fn folded(self) -> Self {
+        Self {
+            conv2d: self.conv2d.folded(),
+            ..self
+        }
+    }
+
+    /// A block of `channels` channels.
+    pub fn new(channels: usize, dropout: f64, device: &Device, rng: &mut NoiseRng) -> Self {
+        Self {
+            conv2d: NormConv2d::new(channels, channels, 3, 1, 1, device, rng),
+            dropout,
+        }
+    }
+
+    /// Applies the block; `noise` drives dropout (None in eval).
+    pub fn forward(&self, x: Tensor<4>, noise: Option<&mut NoiseRng>) -> Tensor<4> {
+        let h = dropout(elu(x.clone(), 1.0), self.dropout, noise);
+        x + self.conv2d.forward(h)
+    }
+}
+
+/// VUNet residual block with a skip input `a`:
+/// `x + conv3×3(dropout(elu(concat[x, pre(elu(a))])))`, the 3×3 conv mapping 2C→C.
+#[derive(Module, Debug)]
+pub struct SkipResBlock {
+    /// The 3×3 convolution 2C→C.
+    pub conv2d: NormConv2d,
+    /// The 1×1 convolution on the activated skip input.
+    pub pre: NormConv2d,
+    /// Dropout probability.
+    pub dropout: f64,
+}
+
+impl SkipResBlock {
+    /// The block with its convolutions folded for inference.
+    pub fn folded(self) -> Self {
+        Self {
+            conv2d: self.conv2d.folded(),
+            pre: self.pre.folded(),
+            ..self
+        }
+    }
+
+    /// A block of `channels` channels.
+    pub fn new(channels: usize, dropout: f64, device: &Device, rng: &mut NoiseRng) -> Self {
+        Self {
+            conv2d: NormConv2d::new(2 * channels, channels, 3, 1, 1, device, rng),
+            pre: NormConv2d::new(channels, channels, 1, 1, 0, device, rng),
+            dropout,
+        }
+    }
+
+    /// Applies the block to `x` with skip input `a`; `noise` drives dropout (None in eval).
+    pub fn forward(&self, x: Tensor<4>, a: Tensor<4>, noise: Option<&mut NoiseRng>) -> Tensor<4> {
+        let a = self.pre.forward(elu(a, 1.0));
+        let h = Tensor::cat(vec![x.clone(), a], 1);
+        let h = dropout(elu(h, 1.0), self.dropout, noise);
+        x + self.conv2d.forward(h)
+    }
+}
+
+/// Sub-pixel ×2 upsampling: NormConv2d 3×3 C_in → 4·C_out, then depth-to-space.
+#[derive(Module, Debug)]
+pub struct Upsample {
+    /// The 3×3 convolution to 4·C_out channels.
+    pub up: NormConv2d,
+}
+
+impl Upsample {
+    /// The upsampler with its convolution folded for inference.
+    pub fn folded(self) -> Self {
+        Self {
+            up: self.up.folded(),
+        }
+    }
+
+    /// An upsampler from `cin` to `cout` channels.
+    pub fn new(cin: usize, cout: usize, device: &Device, rng: &mut NoiseRng) -> Self {
+        Self {
+            up: NormConv2d::new(cin, 4 * cout, 3, 1, 1, device, rng),
+        }
+    }
+
+    /// Doubles the resolution of `x`.
+    pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        depth_to_space(self.up.forward(x))
+    }
+}
+
+/// Strided ×2 downsampling: NormConv2d 3×3, stride 2, padding 1.
+#[derive(Module, Debug)]
+pub struct Downsample {
+    /// The strided convolution.
+    pub down: NormConv2d,
+}
+
+impl Downsample {
+    /// The downsampler with its convolution folded for inference.
+    pub fn folded(self) -> Self {
+        Self {
+            down: self.down.folded(),
+        }
+    }
+
+    /// A downsampler from `cin` to `cout` channels.
+    pub fn new(cin: usize, cout: usize, device: &Device, rng: &mut NoiseRng) -> Self {
+        Self {
+            down: NormConv2d::new(cin, cout, 3, 2, 1, device, rng),
+        }
+    }
+
+    /// Halves the resolution of `x`.
+    pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        self.down.forward(x)
+    }
+}
+
+/// Depth-to-space with block 2 in TensorFlow ("DCR") order, as the reference:
+/// `out[c, 2h+i, 2w+j] = in[(2i+j)·C' + c, h, w]` with C' = C/4.
+pub fn depth_to_space(x: Tensor<4>) -> Tensor<4> {
+    let [n, c, h, w] = x.dims();
+    let c_out = c / 4;
+    x.reshape([n, 2, 2, c_out, h, w])
+        .permute([0, 3, 4, 1, 5, 2])
+        .reshape([n, c_out, 2 * h, 2 * w])
+}
+
+/// Space-to-depth with block 2, the inverse of [`depth_to_space`]:
+/// `out[(2i+j)·C + c, h, w] = in[c, 2h+i, 2w+j]`.
+pub fn space_to_depth(x: Tensor<4>) -> Tensor<4> {
+    let [n, c, h, w] = x.dims();
+    x.reshape([n, c, h / 2, 2, w / 2, 2])
+        .permute([0, 3, 5, 1, 2, 4])
+        .reshape([n, 4 * c, h / 2, w / 2])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn values(t: Tensor<4>) -> Vec<f32> {
+        t.into_data().try_to_vec::<f32>().expect("f32 tensor")
+    }
+
+    #[test]
+    fn depth_to_space_uses_the_tensorflow_channel_order() {
+        let device = Device::flex();
+        // 8 channels of 1×1: channel k holds value k.
+        let x = tensor((0..8).map(|v| v as f32).collect(), [1, 8, 1, 1], &device);
+        let y = depth_to_space(x.clone());
+        assert_eq!(y.dims(), [1, 2, 2, 2]);
+        // out[c, i, j] = in[(2i + j)·2 + c]
+        assert_eq!(
+            values(y.clone()),
+            vec![0.0, 2.0, 4.0, 6.0, 1.0, 3.0, 5.0, 7.0]
+        );
+        assert_eq!(values(space_to_depth(y)), values(x));
+    }
+
+    #[test]
+    fn weight_norm_rescales_each_output_channel_to_g() {
+        let device = Device::flex();
+        let mut rng = NoiseRng::new(1);
+        let mut layer = NormConv2d::new(3, 2, 3, 1, 1, &device, &mut rng);
+        layer.conv.weight_g = param(vec![2.0, 0.5], [2, 1, 1, 1], &device);
+        let w = values(layer.conv.weight());
+        for (row, g) in w.chunks(27).zip([2.0f32, 0.5]) {
+            let norm = row.iter().map(|x| x * x).sum::<f32>().sqrt();
+            assert!((norm - g).abs() < 1e-5, "norm {norm} vs g {g}");
+        }
+    }
+
+    #[test]
+    fn folded_conv_matches_the_layer() {
+        let device = Device::flex();
+        let mut rng = NoiseRng::new(2);
+        let mut layer = NormConv2d::new(4, 3, 3, 2, 1, &device, &mut rng);
+        layer.gamma = param(vec![0.5, 2.0, -1.0], [1, 3, 1, 1], &device);
+        layer.beta = param(vec![0.1, -0.2, 0.3], [1, 3, 1, 1], &device);
+        let x = tensor(
+            rng.normal_vec(2 * 4 * 8 * 8, 0.0, 1.0),
+            [2, 4, 8, 8],
+            &device,
+        );
+        let a = values(layer.forward(x.clone()));
+        let b = values(layer.folded().forward(x));
+        let max = a
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (p - q).abs())
+            .fold(0.0, f32::max);
+        assert!(max < 1e-5, "max diff {max}");
+    }
+}

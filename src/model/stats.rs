@@ -1,0 +1,218 @@
+//! Training statistics stored with a model: mean and population std of the per-cube scores
+//! S_r and S_p (for the frame-level z-scores, spec §6) and median / quartiles of the per-pixel
+//! squared errors (for the pixel-level robust scaling, spec Part A.6), plus their accumulator.
+
+use serde::{Deserialize, Serialize};
+
+use super::rng::NoiseRng;
+
+/// Mean and population standard deviation (numpy `np.std`, ddof 0) of one score.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ScoreStats {
+    /// Mean.
+    pub mean: f64,
+    /// Population standard deviation.
+    pub std: f64,
+}
+
+impl ScoreStats {
+    /// The z-score of `value`; 0 when the std is 0 (every training score was equal).
+    pub fn z(&self, value: f64) -> f64 {
+        if self.std > 0.0 {
+            (value - self.mean) / self.std
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Robust location and spread of the per-pixel squared errors, taken over all elements of
+/// the error tensors together (as the reference robust-scales whole error tensors).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PixelStats {
+    /// Median.
+    pub median: f64,
+    /// First quartile.
+    pub q25: f64,
+    /// Third quartile.
+    pub q75: f64,
+    /// Interquartile range q75 − q25.
+    pub iqr: f64,
+    /// How many values the quantiles were computed from (a uniform sample of all of them).
+    pub sampled: u64,
+    /// How many values there were in total.
+    pub total: u64,
+}
+
+/// Everything the scoring needs from the training data.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TrainingStats {
+    /// Number of training cubes.
+    pub cubes: u64,
+    /// S_r: per-cube sum of squared flow-reconstruction errors.
+    pub flow_score: ScoreStats,
+    /// S_p: per-cube sum of squared frame-prediction errors.
+    pub frame_score: ScoreStats,
+    /// Per-element squared flow errors (all flow channels).
+    pub flow_pixel: PixelStats,
+    /// Per-element squared frame errors (all colour channels).
+    pub frame_pixel: PixelStats,
+}
+
+/// Reservoir sample of a stream of values (Vitter's algorithm R), for quantiles of streams
+/// too large to hold (the paper set has ~1.2 billion flow-error values).
+#[derive(Debug, Clone)]
+struct Reservoir {
+    capacity: usize,
+    seen: u64,
+    values: Vec<f32>,
+}
+
+impl Reservoir {
+    fn new(capacity: usize) -> Self {
+        Self {
+            capacity,
+            seen: 0,
+            values: Vec::with_capacity(capacity.min(1 << 20)),
+        }
+    }
+
+    fn push_all(&mut self, values: &[f32], rng: &mut NoiseRng) {
+        for &v in values {
+            self.seen += 1;
+            if self.values.len() < self.capacity {
+                self.values.push(v);
+            } else {
+                let j = (rng.next_u64() % self.seen) as usize;
+                if j < self.capacity {
+                    self.values[j] = v;
+                }
+            }
+        }
+    }
+
+    fn stats(mut self) -> PixelStats {
+        self.values.sort_unstable_by(f32::total_cmp);
+        let q = |p: f64| quantile_sorted(&self.values, p);
+        let (q25, median, q75) = (q(0.25), q(0.5), q(0.75));
+        PixelStats {
+            median,
+            q25,
+            q75,
+            iqr: q75 - q25,
+            sampled: self.values.len() as u64,
+            total: self.seen,
+        }
+    }
+}
+
+/// Quantile `p` of sorted `values` with numpy's default "linear" interpolation; 0 if empty.
+pub fn quantile_sorted(values: &[f32], p: f64) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let pos = p * (values.len() - 1) as f64;
+    let lo = pos.floor() as usize;
+    let hi = pos.ceil() as usize;
+    let frac = pos - lo as f64;
+    values[lo] as f64 + (values[hi] as f64 - values[lo] as f64) * frac
+}
+
+/// Accumulates [`TrainingStats`] over batches of model outputs.
+#[derive(Debug, Clone)]
+pub struct StatsAccumulator {
+    cubes: u64,
+    flow_scores: Vec<f64>,
+    frame_scores: Vec<f64>,
+    flow_pixels: Reservoir,
+    frame_pixels: Reservoir,
+    rng: NoiseRng,
+}
+
+impl StatsAccumulator {
+    /// An empty accumulator keeping at most `pixel_sample` values per error kind for the
+    /// quantiles (exact when the data set has fewer).
+    pub fn new(pixel_sample: usize, seed: u64) -> Self {
+        Self {
+            cubes: 0,
+            flow_scores: Vec::new(),
+            frame_scores: Vec::new(),
+            flow_pixels: Reservoir::new(pixel_sample),
+            frame_pixels: Reservoir::new(pixel_sample),
+            rng: NoiseRng::new(seed),
+        }
+    }
+
+    /// Adds one cube: its scores and its per-element squared errors.
+    pub fn push(&mut self, s_r: f32, s_p: f32, flow_error: &[f32], frame_error: &[f32]) {
+        self.cubes += 1;
+        self.flow_scores.push(s_r as f64);
+        self.frame_scores.push(s_p as f64);
+        self.flow_pixels.push_all(flow_error, &mut self.rng);
+        self.frame_pixels.push_all(frame_error, &mut self.rng);
+    }
+
+    /// The statistics of everything pushed so far.
+    pub fn finish(self) -> TrainingStats {
+        let n = self.cubes.max(1) as f64;
+        let moments = |scores: &[f64]| {
+            let mean = scores.iter().sum::<f64>() / n;
+            let var = scores.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / n;
+            ScoreStats {
+                mean,
+                std: var.sqrt(),
+            }
+        };
+        TrainingStats {
+            cubes: self.cubes,
+            flow_score: moments(&self.flow_scores),
+            frame_score: moments(&self.frame_scores),
+            flow_pixel: self.flow_pixels.stats(),
+            frame_pixel: self.frame_pixels.stats(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantiles_follow_numpy_linear_interpolation() {
+        let v = [1.0f32, 2.0, 3.0, 4.0];
+        assert!((quantile_sorted(&v, 0.25) - 1.75).abs() < 1e-12);
+        assert!((quantile_sorted(&v, 0.5) - 2.5).abs() < 1e-12);
+        assert!((quantile_sorted(&v, 0.75) - 3.25).abs() < 1e-12);
+    }
+
+    #[test]
+    fn accumulator_gives_population_moments_and_exact_small_quantiles() {
+        let mut acc = StatsAccumulator::new(1000, 1);
+        for (r, p) in [(1.0, 10.0), (2.0, 20.0), (3.0, 30.0), (4.0, 40.0)] {
+            acc.push(r, p, &[r, r], &[p]);
+        }
+        let s = acc.finish();
+        assert_eq!(s.cubes, 4);
+        assert!((s.flow_score.mean - 2.5).abs() < 1e-12);
+        assert!((s.flow_score.std - 1.25f64.sqrt()).abs() < 1e-12);
+        assert!((s.frame_score.mean - 25.0).abs() < 1e-12);
+        assert_eq!(s.flow_pixel.sampled, 8);
+        assert!((s.flow_pixel.median - 2.5).abs() < 1e-12);
+        assert!((s.frame_pixel.iqr - 15.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn reservoir_sample_estimates_quantiles_of_a_long_stream() {
+        let mut acc = StatsAccumulator::new(20_000, 7);
+        let values: Vec<f32> = (0..200_000).map(|i| i as f32).collect();
+        acc.push(0.0, 0.0, &values, &[]);
+        let s = acc.finish().flow_pixel;
+        assert_eq!(s.total, 200_000);
+        assert_eq!(s.sampled, 20_000);
+        assert!(
+            (s.median / 100_000.0 - 1.0).abs() < 0.02,
+            "median {}",
+            s.median
+        );
+    }
+}

@@ -1,0 +1,122 @@
+//! The error type of the `score` module: every variant names the file (or the scenario and
+//! frame) involved and says what is wrong.
+
+use std::path::{Path, PathBuf};
+
+use crate::flow::FlowError;
+use crate::model::ModelError;
+use crate::sequence::SequenceError;
+
+/// Everything that can go wrong producing, storing, reading or evaluating scores.
+#[derive(Debug, thiserror::Error)]
+pub enum ScoreError {
+    /// Reading the scenario failed (frames, boxes, flows, metadata).
+    #[error(transparent)]
+    Sequence(#[from] SequenceError),
+    /// The operating system refused to read or write a file.
+    #[error("{path}: {source}")]
+    Io {
+        /// File or folder involved.
+        path: PathBuf,
+        /// Underlying I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A score cache is truncated, corrupt, of another version or of another scenario.
+    #[error("score cache {path}: {problem}")]
+    Cache {
+        /// The cache file.
+        path: PathBuf,
+        /// What is wrong, in words.
+        problem: String,
+    },
+    /// A line of a detection file is malformed.
+    #[error("{path}:{line}: {problem}")]
+    DetectionLine {
+        /// Detection file.
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong with that line.
+        problem: String,
+    },
+    /// A detection file as a whole cannot be used (unknown format, bad JSON structure).
+    #[error("{path}: {problem}")]
+    DetectionFile {
+        /// Detection file or folder.
+        path: PathBuf,
+        /// What is wrong, in words.
+        problem: String,
+    },
+    /// The model failed on the cubes of a frame.
+    #[error("{scenario}, frame {frame}: {source}")]
+    Model {
+        /// Scenario folder.
+        scenario: PathBuf,
+        /// Frame index whose cubes were being scored (the first of the batch).
+        frame: usize,
+        /// What the model said.
+        #[source]
+        source: ModelError,
+    },
+    /// Optical flow could not be estimated for a frame pair.
+    #[error("{scenario}, flow into frame {frame}: {source}")]
+    Flow {
+        /// Scenario folder.
+        scenario: PathBuf,
+        /// Frame index the flow leads into.
+        frame: usize,
+        /// What the estimator said.
+        #[source]
+        source: FlowError,
+    },
+    /// The model has no training statistics, so its scores cannot be z-scored.
+    #[error(
+        "model has no training statistics: scores cannot be normalised (compute them with `vadscope train` first)"
+    )]
+    NoTrainingStats,
+    /// Inputs that do not fit together (a request, a hand-built table).
+    #[error("{0}")]
+    Invalid(String),
+    /// The caller asked the scoring run to stop; nothing was written.
+    #[error("scoring of {scenario} was cancelled; no cache was written")]
+    Cancelled {
+        /// Scenario folder.
+        scenario: PathBuf,
+    },
+}
+
+impl ScoreError {
+    /// Wraps an I/O error with the path it happened on.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Self::Io {
+            path: path.into(),
+            source,
+        }
+    }
+
+    /// A problem with the score cache at `path`.
+    pub fn cache(path: &Path, problem: impl Into<String>) -> Self {
+        Self::Cache {
+            path: path.to_path_buf(),
+            problem: problem.into(),
+        }
+    }
+
+    /// A problem with line `line` (1-based) of detection file `path`.
+    pub fn line(path: &Path, line: usize, problem: impl Into<String>) -> Self {
+        Self::DetectionLine {
+            path: path.to_path_buf(),
+            line,
+            problem: problem.into(),
+        }
+    }
+
+    /// A problem with detection file `path` as a whole.
+    pub fn detections(path: &Path, problem: impl Into<String>) -> Self {
+        Self::DetectionFile {
+            path: path.to_path_buf(),
+            problem: problem.into(),
+        }
+    }
+}

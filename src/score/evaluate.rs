@@ -1,0 +1,525 @@
+//! Evaluation over scored scenarios: frame-level metrics by box source and by domain ×
+//! weather ([`evaluate_dataset`]), box IoU of the scored boxes against the ground truth,
+//! and pixel-level ROC metrics of the heatmaps ([`PixelRoc`]).
+//!
+//! Frame AUROC is micro (all metric frames of a group concatenated, as the reference);
+//! macro (mean of per-scenario AUROCs, scenarios with a single class skipped) is reported
+//! beside it. FPR95 is read at the first threshold whose TPR reaches 0.95; the AD code's
+//! "closest to 0.95" variant is reported too.
+//!
+//! Pixel metrics run on the full-resolution grid and, like frame metrics, skip the first
+//! `clip_hist` frames (the AD code keeps them and works at 192×128). Every pixel counts;
+//! to keep memory bounded the scores are merged into bins of relative width 2⁻¹⁵ (ties
+//! within a bin count as equal scores), which moves AUROC and AP by far less than their
+//! printed precision.
+
+use std::collections::HashMap;
+
+use image::GrayImage;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::eval::{MetricsError, RocCurve, RocPoint, ScoreMetrics, macro_auroc};
+use crate::sequence::{BoxRecord, Domain, Scenario, Weather};
+
+use super::ScoreError;
+use super::boxes::BoxMatchStats;
+use super::cache::{ModelKey, ScoreCache, ScoreTable};
+use super::fusion::{
+    FrameMetricOptions, FusionWeights, Heatmap, HeatmapScratch, PixelReferenceMode,
+    compose_heatmap, frame_scores, metric_frames,
+};
+use super::run::ScoreRequest;
+
+/// One scored scenario as evaluation sees it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScenarioScores {
+    /// Scenario name.
+    pub name: String,
+    /// Road environment.
+    pub domain: Domain,
+    /// Weather.
+    pub weather: Weather,
+    /// Box source label (rows are grouped by it).
+    pub box_source: String,
+    /// Per-frame anomaly flags.
+    pub labels: Vec<bool>,
+    /// The cached scores.
+    pub table: ScoreTable,
+    /// Scored boxes against the ground truth, when computed.
+    pub boxes: Option<BoxMatchStats>,
+}
+
+impl ScenarioScores {
+    /// Gathers labels, metadata and (with `iou_threshold`) the box agreement of the cached
+    /// objects' boxes with the ground truth of `scenario`.
+    pub fn from_table(
+        scenario: &Scenario,
+        box_source: impl Into<String>,
+        table: ScoreTable,
+        iou_threshold: Option<f32>,
+    ) -> Result<Self, ScoreError> {
+        let labels = scenario.frame_labels().flags.clone();
+        if labels.len() != table.frames.len() {
+            return Err(ScoreError::Invalid(format!(
+                "{}: {} frame labels but the score table has {} frames",
+                scenario.root().display(),
+                labels.len(),
+                table.frames.len()
+            )));
+        }
+        let boxes = match iou_threshold {
+            Some(threshold) => Some(scored_box_agreement(scenario, &table, threshold)?),
+            None => None,
+        };
+        let meta = scenario.meta();
+        Ok(Self {
+            name: scenario.name().to_string(),
+            domain: meta.domain,
+            weather: meta.weather,
+            box_source: box_source.into(),
+            labels,
+            table,
+            boxes,
+        })
+    }
+}
+
+impl ScenarioScores {
+    /// The scores of `scenario` for `request` and `model` from its score cache, with box
+    /// agreement at `iou_threshold`; `Ok(None)` when the scenario has not been scored so.
+    /// The rows of [`evaluate_dataset`] are grouped by [`super::BoxSource::label`].
+    pub fn from_cache(
+        scenario: &Scenario,
+        request: &ScoreRequest,
+        model: ModelKey,
+        iou_threshold: Option<f32>,
+    ) -> Result<Option<Self>, ScoreError> {
+        let key = request.key(scenario, model)?;
+        let Some(cache) = ScoreCache::lookup(scenario, &key)? else {
+            return Ok(None);
+        };
+        Self::from_table(
+            scenario,
+            request.boxes.label(),
+            cache.into_table(),
+            iou_threshold,
+        )
+        .map(Some)
+    }
+}
+
+/// Agreement of the boxes that were scored (the cache's objects) with the ground truth of
+/// `scenario`, frame by frame.
+pub fn scored_box_agreement(
+    scenario: &Scenario,
+    table: &ScoreTable,
+    iou_threshold: f32,
+) -> Result<BoxMatchStats, ScoreError> {
+    let mut stats = BoxMatchStats::new(iou_threshold);
+    for i in 0..table.frames.len() {
+        let id = table.frames[i].id;
+        let scored: Vec<BoxRecord> = table
+            .frame_objects(i)
+            .iter()
+            .map(|o| BoxRecord {
+                frame: id,
+                track_id: o.track_id,
+                x1: o.bbox[0],
+                y1: o.bbox[1],
+                x2: o.bbox[2],
+                y2: o.bbox[3],
+                class: o.class,
+                score: o.confidence,
+                anomalous: false,
+            })
+            .collect();
+        stats.add_frame(&scenario.boxes(i)?, &scored);
+    }
+    Ok(stats)
+}
+
+/// One row of the evaluation table.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EvalRow {
+    /// Box source label.
+    pub box_source: String,
+    /// Domain of the group; `None` = all domains.
+    pub domain: Option<Domain>,
+    /// Weather of the group; `None` = all weathers.
+    pub weather: Option<Weather>,
+    /// Scenarios in the group.
+    pub scenarios: usize,
+    /// Frames entering the metrics (after the skipped first frames).
+    pub frames: usize,
+    /// Anomalous ones among them.
+    pub anomalous_frames: usize,
+    /// Micro AUROC, AP, FPR95 etc.; `None` when the group has a single class.
+    pub metrics: Option<ScoreMetrics>,
+    /// Macro AUROC: mean over scenarios with both classes.
+    pub auroc_macro: Option<f64>,
+    /// Scenarios that entered the macro AUROC.
+    pub macro_scenarios: usize,
+    /// Mean IoU of the ground-truth boxes with the scored boxes.
+    pub mean_iou: Option<f64>,
+    /// Ground-truth boxes found at the IoU threshold.
+    pub box_recall: Option<f64>,
+}
+
+fn condition_order(domain: Domain, weather: Weather) -> (u8, u8) {
+    let d = match domain {
+        Domain::City => 0,
+        Domain::Highway => 1,
+        Domain::Unknown => 2,
+    };
+    let w = match weather {
+        Weather::Sun => 0,
+        Weather::Rain => 1,
+        Weather::Fog => 2,
+        Weather::Night => 3,
+        Weather::Unknown => 4,
+    };
+    (d, w)
+}
+
+fn group_row(
+    box_source: &str,
+    condition: Option<(Domain, Weather)>,
+    members: &[(&ScenarioScores, Vec<f64>, Vec<bool>)],
+) -> Result<EvalRow, ScoreError> {
+    let scores: Vec<f64> = members
+        .iter()
+        .flat_map(|(_, s, _)| s.iter().copied())
+        .collect();
+    let labels: Vec<bool> = members
+        .iter()
+        .flat_map(|(_, _, l)| l.iter().copied())
+        .collect();
+    let metrics = match ScoreMetrics::compute(&scores, &labels) {
+        Ok(m) => Some(m),
+        Err(MetricsError::SingleClass { .. }) => None,
+        Err(e) => return Err(ScoreError::Invalid(format!("{box_source}: {e}"))),
+    };
+    let per_scenario = members.iter().map(|(_, s, l)| (s.as_slice(), l.as_slice()));
+    let macro_result =
+        macro_auroc(per_scenario).map_err(|e| ScoreError::Invalid(format!("{box_source}: {e}")))?;
+    let mut boxes: Option<BoxMatchStats> = None;
+    for (m, _, _) in members {
+        if let Some(b) = &m.boxes {
+            boxes
+                .get_or_insert_with(|| BoxMatchStats::new(b.iou_threshold))
+                .merge(b);
+        }
+    }
+    Ok(EvalRow {
+        box_source: box_source.to_string(),
+        domain: condition.map(|c| c.0),
+        weather: condition.map(|c| c.1),
+        scenarios: members.len(),
+        frames: labels.len(),
+        anomalous_frames: labels.iter().filter(|&&l| l).count(),
+        metrics,
+        auroc_macro: macro_result.map(|(a, _)| a),
+        macro_scenarios: macro_result.map_or(0, |(_, n)| n),
+        mean_iou: boxes.and_then(|b| b.mean_iou()),
+        box_recall: boxes.and_then(|b| b.recall()),
+    })
+}
+
+/// The evaluation table: per box source (in order of first appearance) a row over all its
+/// scenarios, followed by one row per domain × weather present.
+pub fn evaluate_dataset(
+    items: &[ScenarioScores],
+    weights: &FusionWeights,
+    options: &FrameMetricOptions,
+) -> Result<Vec<EvalRow>, ScoreError> {
+    // Scenarios are fused and filtered independently: spread them over the cores.
+    let prepared = items
+        .par_iter()
+        .map(|item| {
+            let raw = frame_scores(&item.table, weights);
+            let skip = options
+                .skip_first
+                .unwrap_or(item.table.meta.clip_hist as usize);
+            let (scores, labels) =
+                metric_frames(&raw, &item.labels, skip, options.median_kernel)
+                    .map_err(|e| ScoreError::Invalid(format!("{}: {e}", item.name)))?;
+            Ok((item, scores, labels))
+        })
+        .collect::<Result<Vec<_>, ScoreError>>()?;
+    let mut sources: Vec<&str> = Vec::new();
+    for item in items {
+        if !sources.contains(&item.box_source.as_str()) {
+            sources.push(&item.box_source);
+        }
+    }
+    let mut rows = Vec::new();
+    for source in sources {
+        let members: Vec<_> = prepared
+            .iter()
+            .filter(|(m, _, _)| m.box_source == source)
+            .map(|(m, s, l)| (*m, s.clone(), l.clone()))
+            .collect();
+        rows.push(group_row(source, None, &members)?);
+        let mut conditions: Vec<(Domain, Weather)> = Vec::new();
+        for (m, _, _) in &members {
+            if !conditions.contains(&(m.domain, m.weather)) {
+                conditions.push((m.domain, m.weather));
+            }
+        }
+        conditions.sort_by_key(|&(d, w)| condition_order(d, w));
+        for condition in conditions {
+            let group: Vec<_> = members
+                .iter()
+                .filter(|(m, _, _)| (m.domain, m.weather) == condition)
+                .cloned()
+                .collect();
+            rows.push(group_row(source, Some(condition), &group)?);
+        }
+    }
+    Ok(rows)
+}
+
+/// The table as aligned text, one row per line (metrics as percentages, `-` where a
+/// metric is undefined).
+pub fn format_eval_table(rows: &[EvalRow]) -> String {
+    let percent =
+        |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{:.1}", 100.0 * v));
+    let header = [
+        "box source",
+        "domain",
+        "weather",
+        "scen.",
+        "frames",
+        "anom.",
+        "AUROC",
+        "AUROC macro",
+        "AUPR",
+        "FPR95",
+        "FPR95 closest",
+        "mIoU",
+        "recall",
+    ];
+    let mut cells: Vec<Vec<String>> = vec![header.iter().map(|h| h.to_string()).collect()];
+    for r in rows {
+        let m = r.metrics;
+        cells.push(vec![
+            r.box_source.clone(),
+            r.domain
+                .map_or_else(|| "all".into(), |d| format!("{d:?}").to_lowercase()),
+            r.weather
+                .map_or_else(|| "all".into(), |w| format!("{w:?}").to_lowercase()),
+            r.scenarios.to_string(),
+            r.frames.to_string(),
+            r.anomalous_frames.to_string(),
+            percent(m.map(|m| m.auroc)),
+            percent(r.auroc_macro),
+            percent(m.map(|m| m.average_precision)),
+            percent(m.map(|m| m.fpr95)),
+            percent(m.map(|m| m.fpr95_closest)),
+            percent(r.mean_iou),
+            percent(r.box_recall),
+        ]);
+    }
+    let widths: Vec<usize> = (0..header.len())
+        .map(|c| {
+            cells
+                .iter()
+                .map(|row| row[c].chars().count())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let mut out = String::new();
+    for row in &cells {
+        let line: Vec<String> = row
+            .iter()
+            .zip(&widths)
+            .enumerate()
+            .map(|(c, (cell, &w))| {
+                if c < 3 {
+                    format!("{cell:<w$}")
+                } else {
+                    format!("{cell:>w$}")
+                }
+            })
+            .collect();
+        out.push_str(line.join("  ").trim_end());
+        out.push('\n');
+    }
+    out
+}
+
+/// Pixel scores and labels merged into score bins, for a ROC curve over any number of
+/// pixels.
+#[derive(Debug, Clone, Default)]
+pub struct PixelRoc {
+    /// (anomalous, normal) pixels per score bin.
+    bins: HashMap<u32, (u64, u64)>,
+    /// Pixels scored exactly 0 (outside every box): anomalous, normal.
+    zero: (u64, u64),
+}
+
+/// Bits dropped from a score's order-preserving key: bins of relative width 2⁻¹⁵.
+const BIN_SHIFT: u32 = 8;
+
+/// A key that orders like the score (negative scores below positive ones).
+fn bin_of(score: f32) -> u32 {
+    let bits = (score + 0.0).to_bits();
+    let ordered = if bits & 0x8000_0000 != 0 {
+        !bits
+    } else {
+        bits | 0x8000_0000
+    };
+    ordered >> BIN_SHIFT
+}
+
+/// The smallest score of bin `bin` (the threshold it stands for).
+fn bin_floor(bin: u32) -> f64 {
+    let ordered = bin << BIN_SHIFT;
+    let bits = if ordered & 0x8000_0000 != 0 {
+        ordered & 0x7fff_ffff
+    } else {
+        !ordered
+    };
+    f64::from(f32::from_bits(bits))
+}
+
+impl PixelRoc {
+    /// An empty accumulator.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Adds the pixels of one heatmap against its mask (non-zero = anomalous); both must
+    /// have the same size.
+    pub fn add(&mut self, heatmap: &Heatmap, mask: &GrayImage) -> Result<(), ScoreError> {
+        if mask.dimensions() != (heatmap.width, heatmap.height) {
+            return Err(ScoreError::Invalid(format!(
+                "heatmap {}×{} and anomaly mask {}×{} differ in size",
+                heatmap.width,
+                heatmap.height,
+                mask.width(),
+                mask.height()
+            )));
+        }
+        for (&score, &m) in heatmap.values.iter().zip(mask.as_raw()) {
+            let anomalous = m != 0;
+            let counts = if score == 0.0 {
+                &mut self.zero
+            } else if score.is_nan() {
+                continue;
+            } else {
+                self.bins.entry(bin_of(score)).or_default()
+            };
+            if anomalous {
+                counts.0 += 1;
+            } else {
+                counts.1 += 1;
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds the counts of `other`.
+    pub fn merge(&mut self, other: &PixelRoc) {
+        for (bin, (p, n)) in &other.bins {
+            let c = self.bins.entry(*bin).or_default();
+            c.0 += p;
+            c.1 += n;
+        }
+        self.zero.0 += other.zero.0;
+        self.zero.1 += other.zero.1;
+    }
+
+    /// The ROC curve, one point per non-empty bin from the highest scores down.
+    pub fn curve(&self) -> Result<RocCurve, MetricsError> {
+        let mut bins: Vec<(u32, (u64, u64))> = self.bins.iter().map(|(k, v)| (*k, *v)).collect();
+        if self.zero.0 + self.zero.1 > 0 {
+            let zero_bin = bin_of(0.0);
+            match bins.iter_mut().find(|(k, _)| *k == zero_bin) {
+                Some((_, c)) => {
+                    c.0 += self.zero.0;
+                    c.1 += self.zero.1;
+                }
+                None => bins.push((zero_bin, self.zero)),
+            }
+        }
+        bins.sort_unstable_by_key(|b| std::cmp::Reverse(b.0));
+        let positives: u64 = bins.iter().map(|(_, c)| c.0).sum();
+        let negatives: u64 = bins.iter().map(|(_, c)| c.1).sum();
+        if positives == 0 || negatives == 0 {
+            return Err(MetricsError::SingleClass {
+                count: (positives + negatives) as usize,
+                positive: positives > 0,
+            });
+        }
+        let mut points = Vec::with_capacity(bins.len() + 1);
+        points.push(RocPoint {
+            threshold: f64::INFINITY,
+            tp: 0,
+            fp: 0,
+        });
+        let (mut tp, mut fp) = (0, 0);
+        for (bin, (p, n)) in bins {
+            tp += p;
+            fp += n;
+            points.push(RocPoint {
+                threshold: bin_floor(bin),
+                tp,
+                fp,
+            });
+        }
+        Ok(RocCurve {
+            points,
+            positives,
+            negatives,
+        })
+    }
+}
+
+/// Adds the full-resolution heatmaps of every frame of `cache` from frame `skip_first` on
+/// to `roc`, against the scenario's anomaly masks. Frames without a mask are skipped;
+/// returns how many frames were added.
+pub fn add_scenario_pixels(
+    roc: &mut PixelRoc,
+    scenario: &Scenario,
+    cache: &ScoreCache,
+    weights: &FusionWeights,
+    mode: PixelReferenceMode,
+    skip_first: usize,
+) -> Result<usize, ScoreError> {
+    let table = cache.table();
+    let mut heatmap = Heatmap::new(table.meta.frame_width, table.meta.frame_height);
+    let mut scratch = HeatmapScratch::default();
+    let mut added = 0;
+    for i in skip_first..table.frames.len() {
+        let Some(mask) = scenario.anomaly_mask(i)? else {
+            continue;
+        };
+        let maps = cache.frame_maps(i)?;
+        compose_heatmap(table, i, &maps, weights, mode, &mut heatmap, &mut scratch)?;
+        roc.add(&heatmap, &mask)?;
+        added += 1;
+    }
+    Ok(added)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bins_preserve_order_and_floors_lie_below_their_scores() {
+        let values = [-3.0f32, -1e-3, 0.0, 1e-6, 0.5, 1.0, 7.25, 1e6];
+        for w in values.windows(2) {
+            assert!(bin_of(w[0]) < bin_of(w[1]), "{} vs {}", w[0], w[1]);
+        }
+        for v in values {
+            let floor = bin_floor(bin_of(v));
+            assert!(floor <= f64::from(v) + 1e-12, "{v}: floor {floor}");
+            assert!((f64::from(v) - floor).abs() <= f64::from(v).abs() * 1e-4 + 1e-30);
+        }
+        assert_eq!(bin_of(-0.0), bin_of(0.0));
+    }
+}

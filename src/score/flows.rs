@@ -1,0 +1,106 @@
+//! Where the optical flow of the cubes comes from ([`FlowSource`]) and a per-frame reader of
+//! it ([`FlowProvider`]).
+//!
+//! Stored flows are the scenario's `OPTICAL_FLOW` files ([`Scenario::flow`]). Estimated
+//! flows are computed with [`DisFlow`] while scoring, from frame i−1 to frame i, seeded with
+//! the previous pair's flow, and kept only for the frames a cube still needs: the on-disk
+//! flow cache (`.vadscope/flow/<preset>/`) is not merged yet, so nothing is persisted.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use crate::flow::{DisFlow, DisPreset, FlowField};
+use crate::sequence::Scenario;
+
+use super::ScoreError;
+
+/// Where the flows of the cubes come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FlowSource {
+    /// The scenario's stored flows; a missing flow (other than at frame 0) is an error.
+    Stored,
+    /// Estimated with DIS at this preset, ignoring stored flows.
+    Estimated(DisPreset),
+    /// Stored where present, else estimated with DIS at this preset.
+    StoredElseEstimated(DisPreset),
+}
+
+impl FlowSource {
+    /// A short stable name for cache file names.
+    pub fn key(&self) -> String {
+        match self {
+            Self::Stored => "stored".into(),
+            Self::Estimated(p) => format!("dis-{}", p.name()),
+            Self::StoredElseEstimated(p) => format!("stored-dis-{}", p.name()),
+        }
+    }
+}
+
+/// Estimated flows kept at most (the cubes of one frame need `clip_hist` of them).
+const KEPT_ESTIMATES: usize = 8;
+
+/// Reads the flow stored at (leading into) each frame from a [`FlowSource`].
+pub struct FlowProvider<'a> {
+    scenario: &'a Scenario,
+    source: FlowSource,
+    estimator: Option<DisFlow>,
+    estimates: HashMap<usize, Arc<FlowField>>,
+}
+
+impl<'a> FlowProvider<'a> {
+    /// A provider of `source` for `scenario`.
+    pub fn new(scenario: &'a Scenario, source: FlowSource) -> Self {
+        let estimator = match source {
+            FlowSource::Stored => None,
+            FlowSource::Estimated(p) | FlowSource::StoredElseEstimated(p) => {
+                Some(DisFlow::from_preset(p))
+            }
+        };
+        Self {
+            scenario,
+            source,
+            estimator,
+            estimates: HashMap::new(),
+        }
+    }
+
+    /// The flow from frame `index − 1` to frame `index`; `None` at frame 0 when nothing is
+    /// stored there (there is no previous frame), and for stored flows that are missing.
+    pub fn flow(&mut self, index: usize) -> Result<Option<Arc<FlowField>>, ScoreError> {
+        if self.source != FlowSource::Stored
+            && let Some(f) = self.estimates.get(&index)
+        {
+            return Ok(Some(f.clone()));
+        }
+        let stored = match self.source {
+            FlowSource::Estimated(_) => None,
+            _ => self.scenario.flow(index)?,
+        };
+        if stored.is_some() || index == 0 {
+            return Ok(stored);
+        }
+        let Some(estimator) = &self.estimator else {
+            return Ok(None);
+        };
+        let prev = self.scenario.rgb(index - 1)?;
+        let next = self.scenario.rgb(index)?;
+        let prior = self.estimates.get(&(index - 1)).cloned();
+        let flow = estimator
+            .estimate(prev.as_ref(), next.as_ref(), prior.as_deref())
+            .map_err(|source| ScoreError::Flow {
+                scenario: self.scenario.root().to_path_buf(),
+                frame: index,
+                source,
+            })?;
+        let flow = Arc::new(flow);
+        self.estimates.insert(index, flow.clone());
+        if self.estimates.len() > KEPT_ESTIMATES {
+            let keep_from = index.saturating_sub(KEPT_ESTIMATES - 1);
+            self.estimates.retain(|&k, _| k >= keep_from && k <= index);
+        }
+        Ok(Some(flow))
+    }
+}

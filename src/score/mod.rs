@@ -1,0 +1,55 @@
+//! Scores: per-object errors from the model, a persistent score cache, and fusion of the
+//! cached errors into frame scores, pixel heatmaps and metrics for any weights.
+//!
+//! The split that makes the viewer interactive: the model runs once per scenario, model,
+//! box source and flow source ([`run`]) and its outputs are stored ([`cache`]); every
+//! change of weights only re-runs [`fusion`], which is pure and cheap.
+//!
+//! Entry points:
+//! - [`BoxSource`] / [`BoxProvider`]: ground truth, the scenario's detections, imported
+//!   detection files ([`detections`]: MOT, COCO, YOLO, `boxes.csv`) and the detector-free
+//!   motion boxes ([`motion`]); [`match_boxes`] / [`BoxMatchStats`] / [`match_scenario`] for
+//!   box IoU and recall against the ground truth.
+//! - [`FlowSource`] / [`FlowProvider`]: stored flows, or DIS estimates.
+//! - [`score_scenario_with`] / [`run_scoring`]: the scoring run (progress callback,
+//!   cancellation flag) writing a [`ScoreCache`] at [`CacheKey::path_in`].
+//! - [`ScoreCache::open`] / [`ScoreCache::lookup`]: the cache; [`ScoreTable`] is its
+//!   scalar part, [`ScoreCache::frame_maps`] reads one frame's maps.
+//! - [`fusion::frame_scores`], [`fusion::metric_frames`], [`fusion::compose_heatmap`] with
+//!   [`FusionWeights`] (presets [`FusionWeights::PRESETS`]) and [`PixelReferenceMode`].
+//! - [`ScenarioScores::from_cache`] + [`evaluate_dataset`] + [`format_eval_table`]: the
+//!   table by box source and domain × weather (AUROC micro and macro, AP, FPR95, box IoU
+//!   and recall); [`PixelRoc`] + [`add_scenario_pixels`] for pixel-level metrics.
+
+pub mod boxes;
+pub mod cache;
+pub mod detections;
+mod error;
+pub mod evaluate;
+pub mod flows;
+pub mod fusion;
+pub mod motion;
+pub mod run;
+
+pub use boxes::{
+    BoxMatch, BoxMatchStats, BoxProvider, BoxSource, box_iou, match_boxes, match_scenario,
+};
+pub use cache::{
+    CacheKey, CacheWriter, FrameEntry, FrameState, ModelKey, ObjectMaps, ObjectScore,
+    PixelReference, ScoreCache, ScoreMeta, ScoreTable, write_cache,
+};
+pub use detections::{DetectionFile, DetectionFormat, FrameNumbering};
+pub use error::ScoreError;
+pub use evaluate::{
+    EvalRow, PixelRoc, ScenarioScores, add_scenario_pixels, evaluate_dataset, format_eval_table,
+};
+pub use flows::{FlowProvider, FlowSource};
+pub use fusion::{
+    FrameFusion, FrameMetricOptions, FusionWeights, Heatmap, HeatmapScratch, PixelReferenceMode,
+    compose_heatmap, frame_scores, frame_scores_into, metric_frames,
+};
+pub use motion::MotionParams;
+pub use run::{
+    CubeScorer, CubeSource, FrameBoxes, ObjectCube, ScoreProgress, ScoreRequest, ScoringPlan,
+    run_scoring, score_scenario_with,
+};

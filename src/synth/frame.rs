@@ -1,0 +1,211 @@
+//! One frame end to end: ray casting every pixel into a geometry buffer (object key, depth,
+//! surface point) and shaded radiance, then post-processing, ground-truth flow from the
+//! previous frame's geometry buffer, boxes and the ACTION/ANOMALY records, assembled into a
+//! `sequence::FrameRecord`.
+
+use rayon::prelude::*;
+
+use super::math::{Rgb, V3};
+use super::render::{FrameView, KEY_BACKDROP, KEY_GROUND, KEY_SKY, KEY_VEHICLE, TILE};
+use super::scenario::World;
+use super::{flow, labels, post, shade};
+use crate::sequence::{FrameId, FrameRecord};
+
+/// Depth written for sky and backdrop pixels (CARLA's far plane).
+pub const FAR_DEPTH_M: f32 = 1000.0;
+
+/// Per-pixel geometry of a frame, kept for the next frame's flow.
+#[derive(Debug, Clone)]
+pub struct GBuffer {
+    /// Width.
+    pub width: usize,
+    /// Height.
+    pub height: usize,
+    /// Object key per pixel.
+    pub key: Vec<u32>,
+    /// Depth along the optical axis (infinite for sky and backdrop).
+    pub depth: Vec<f32>,
+    /// Surface point: vehicle-local for vehicles, world for everything static, the ray
+    /// direction for sky and backdrop.
+    pub point: Vec<V3>,
+}
+
+/// Shaded output of a frame before post-processing.
+pub struct Shading {
+    /// Linear radiance.
+    pub hdr: Vec<Rgb>,
+    /// Semantic ids.
+    pub semantic: Vec<u8>,
+    /// Instance tags.
+    pub tag: Vec<u8>,
+    /// Instance ids.
+    pub id: Vec<u16>,
+}
+
+#[derive(Clone, Copy, Default)]
+struct Px {
+    key: u32,
+    part: u8,
+    depth: f32,
+    point: V3,
+    rgb: Rgb,
+    semantic: u8,
+    tag: u8,
+    id: u16,
+}
+
+/// Ray-casts every pixel of `view`; shades them too when `with_shading`.
+pub fn cast(view: &FrameView, with_shading: bool) -> (GBuffer, Option<Shading>) {
+    let w = view.cam.width as usize;
+    let h = view.cam.height_px as usize;
+    let mut px = vec![Px::default(); w * h];
+    let cam = &view.cam;
+    let tiles_x = w.div_ceil(TILE);
+    px.par_chunks_mut(w * TILE)
+        .enumerate()
+        .for_each(|(band, rows)| {
+            let band_rows = rows.len() / w;
+            // Tile by tile, so that each tile's primitive list is fetched once and the
+            // previous pixel's ground point seeds the Frenet inversion of the next.
+            for tx in 0..tiles_x {
+                let tile = band * tiles_x + tx;
+                let x_end = ((tx + 1) * TILE).min(w);
+                for r in 0..band_rows {
+                    let y = band * TILE + r;
+                    let mut s_hint = None;
+                    for x in tx * TILE..x_end {
+                        let out = &mut rows[r * w + x];
+                        let (u, v) = (x as f32 + 0.5, y as f32 + 0.5);
+                        let dir = cam.ray(u, v);
+                        let hit = view.trace_in_tile(dir, u, v, tile, s_hint);
+                        s_hint = (hit.key == KEY_GROUND).then_some(hit.local.x);
+                        out.key = hit.key;
+                        out.part = hit.part;
+                        out.depth = hit.t;
+                        out.point = match hit.key {
+                            KEY_SKY | KEY_BACKDROP => dir,
+                            k if k & KEY_VEHICLE != 0 => hit.local,
+                            _ => {
+                                let p = cam.origin() + dir * hit.t;
+                                V3::new(cam.x + p.x, cam.y + p.y, p.z)
+                            }
+                        };
+                        if with_shading {
+                            let s = shade::shade(view, &hit, dir, tile);
+                            out.rgb = s.rgb;
+                            out.semantic = s.semantic;
+                            out.tag = s.tag;
+                            out.id = s.id;
+                        }
+                    }
+                }
+            }
+        });
+    if with_shading {
+        antialias_edges(view, &mut px);
+    }
+    let gbuf = GBuffer {
+        width: w,
+        height: h,
+        key: px.iter().map(|p| p.key).collect(),
+        depth: px.iter().map(|p| p.depth).collect(),
+        point: px.iter().map(|p| p.point).collect(),
+    };
+    let shading = with_shading.then(|| Shading {
+        hdr: px.iter().map(|p| p.rgb).collect(),
+        semantic: px.iter().map(|p| p.semantic).collect(),
+        tag: px.iter().map(|p| p.tag).collect(),
+        id: px.iter().map(|p| p.id).collect(),
+    });
+    (gbuf, shading)
+}
+
+/// Sub-pixel offsets of the extra samples at object boundaries (with the centre sample they
+/// form a diagonal of three, enough to soften silhouettes at a third of the cost of 4×).
+const EDGE_SAMPLES: [(f32, f32); 2] = [(-0.25, -0.25), (0.25, 0.25)];
+
+/// Re-shades pixels on object boundaries with two extra samples and averages them with the
+/// centre sample, so that silhouettes are anti-aliased. Labels, depth and geometry keep the
+/// centre sample.
+fn antialias_edges(view: &FrameView, px: &mut [Px]) {
+    let w = view.cam.width as usize;
+    let h = view.cam.height_px as usize;
+    // Parts count as separate surfaces so that kerb faces and vehicle parts are smoothed too.
+    let keys: Vec<u32> = px.iter().map(|p| p.key ^ ((p.part as u32) << 24)).collect();
+    let cam = &view.cam;
+    px.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        for (x, out) in row.iter_mut().enumerate() {
+            let k = keys[y * w + x];
+            let differs = (x > 0 && keys[y * w + x - 1] != k)
+                || (x + 1 < w && keys[y * w + x + 1] != k)
+                || (y > 0 && keys[(y - 1) * w + x] != k)
+                || (y + 1 < h && keys[(y + 1) * w + x] != k);
+            if !differs {
+                continue;
+            }
+            let mut sum = out.rgb;
+            for (dx, dy) in EDGE_SAMPLES {
+                let (u, v) = (x as f32 + 0.5 + dx, y as f32 + 0.5 + dy);
+                let dir = cam.ray(u, v);
+                let tile = view.tile_of(u, v);
+                let hit = view.trace_in_tile(dir, u, v, tile, None);
+                sum += shade::shade(view, &hit, dir, tile).rgb;
+            }
+            out.rgb = sum * (1.0 / (1 + EDGE_SAMPLES.len()) as f32);
+        }
+    });
+}
+
+/// Renders frame `frame` completely. `prev` is the previous frame's geometry buffer (for the
+/// flow); frame 0 gets zero flow.
+pub fn render_record(
+    world: &World,
+    frame: usize,
+    prev: Option<&GBuffer>,
+) -> (FrameRecord, GBuffer) {
+    let view = FrameView::new(world, frame);
+    let (gbuf, shading) = cast(&view, true);
+    let Some(shading) = shading else {
+        unreachable!("cast with shading returns shading");
+    };
+    let w = gbuf.width as u32;
+    let h = gbuf.height as u32;
+    let rgb = post::finish(world, &view, &gbuf, shading.hdr);
+    let semantic = image::GrayImage::from_raw(w, h, shading.semantic.clone())
+        .unwrap_or_else(|| image::GrayImage::new(w, h));
+    let mut inst = Vec::with_capacity((w * h * 3) as usize);
+    for (t, id) in shading.tag.iter().zip(&shading.id) {
+        inst.extend_from_slice(&[*t, (*id & 0xff) as u8, (*id >> 8) as u8]);
+    }
+    let instance =
+        image::RgbImage::from_raw(w, h, inst).unwrap_or_else(|| image::RgbImage::new(w, h));
+    let depth_m: Vec<f32> = gbuf.depth.iter().map(|d| d.min(FAR_DEPTH_M)).collect();
+    let flow = match prev {
+        Some(p) => flow::exact_flow(world, p, &view, &gbuf),
+        None => crate::sequence::FlowField::zeros(w, h),
+    };
+    let boxes = labels::boxes(world, frame, &gbuf.key, &shading.tag, w as usize);
+    let anomalous = world
+        .traffic
+        .anomaly
+        .is_some_and(|a| a.contains(frame as u32));
+    let record = FrameRecord {
+        id: FrameId(frame as u64),
+        rgb,
+        semantic: Some(semantic),
+        instance: Some(instance),
+        depth_m: Some(depth_m),
+        flow: Some(flow),
+        action: Some(labels::action(world, frame)),
+        anomaly: labels::anomaly(world, frame),
+        boxes,
+        anomalous: Some(anomalous),
+    };
+    (record, gbuf)
+}
+
+/// The geometry buffer of a frame without shading (to seed the flow of the next frame).
+pub fn geometry(world: &World, frame: usize) -> GBuffer {
+    let view = FrameView::new(world, frame);
+    cast(&view, false).0
+}

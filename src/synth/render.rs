@@ -1,0 +1,762 @@
+//! The ray caster: per frame, the objects near the camera are culled and binned into
+//! 16×16-pixel screen tiles by their projected bounds; each pixel's ray is intersected
+//! analytically with the ground (road, raised sidewalks and kerb faces via Frenet
+//! coordinates) and with the few primitives of its tile (boxes, cylinders, ellipsoids,
+//! panels, and vehicles made of convex parts and wheels).
+
+use super::camera::Camera;
+use super::math::V3;
+use super::scenario::World;
+use super::scenery::{Shape, StaticKind, StaticObject};
+use super::texture::value2;
+use super::vehicle::VehicleModel;
+use crate::sequence::Domain;
+
+/// Tile size in pixels.
+pub const TILE: usize = 16;
+
+/// Object key of the sky.
+pub const KEY_SKY: u32 = 0;
+/// Object key of the ground.
+pub const KEY_GROUND: u32 = 1;
+/// Object key of the distant backdrop (skyline, hills) at infinity.
+pub const KEY_BACKDROP: u32 = 2;
+/// Offset of static-object keys.
+pub const KEY_STATIC: u32 = 16;
+/// Bit marking vehicle keys (the rest is the vehicle index).
+pub const KEY_VEHICLE: u32 = 0x8000_0000;
+
+/// What a primitive of a frame is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PrimRef {
+    /// Index into `Scenery::objects`.
+    Static(u32),
+    /// Index into `Traffic::vehicles`.
+    Vehicle(u32),
+}
+
+/// A primitive placed for one frame, in camera-relative coordinates.
+#[derive(Debug, Clone, Copy)]
+pub struct Prim {
+    /// What it is.
+    pub what: PrimRef,
+    /// Local origin relative to the camera's ground position.
+    pub origin: V3,
+    /// cos(yaw).
+    pub c: f32,
+    /// sin(yaw).
+    pub s: f32,
+    /// Smallest depth of the primitive's bounds (no hit can be nearer).
+    pub near: f32,
+    /// Screen rectangle of the geometry itself (binning may use a larger one that includes
+    /// shadows); rays outside it cannot hit.
+    pub rect: [f32; 4],
+}
+
+impl Prim {
+    /// Object key for flow and occlusion tests.
+    pub fn key(&self) -> u32 {
+        match self.what {
+            PrimRef::Static(i) => KEY_STATIC + i,
+            PrimRef::Vehicle(i) => KEY_VEHICLE | i,
+        }
+    }
+}
+
+/// The nearest surface along a ray.
+#[derive(Debug, Clone, Copy)]
+pub struct Hit {
+    /// Ray parameter = depth along the optical axis (infinite for sky and backdrop).
+    pub t: f32,
+    /// Object key.
+    pub key: u32,
+    /// Index of the primitive in the frame's list (`u32::MAX` for ground, sky, backdrop).
+    pub prim: u32,
+    /// Part index for vehicles (wheels are `WHEEL_PART + k`), 1 for a kerb face, 0 otherwise.
+    pub part: u8,
+    /// Hit point: object-local for primitives, (s, d, z) for the ground, the ray direction
+    /// for sky and backdrop.
+    pub local: V3,
+    /// Surface normal: object-local for primitives, world for the ground.
+    pub normal: V3,
+}
+
+/// Part index offset of wheels.
+pub const WHEEL_PART: u8 = 64;
+
+impl Hit {
+    fn sky(dir: V3) -> Self {
+        Hit {
+            t: f32::INFINITY,
+            key: KEY_SKY,
+            prim: u32::MAX,
+            part: 0,
+            local: dir,
+            normal: V3::default(),
+        }
+    }
+}
+
+/// A light source for night scenes, camera-relative.
+#[derive(Debug, Clone, Copy)]
+pub struct Light {
+    /// Position.
+    pub pos: V3,
+    /// Intensity (radiance scale).
+    pub colour: super::math::Rgb,
+    /// Spot direction (unit), or zero for an omni light.
+    pub dir: V3,
+    /// Cosine of the spot's half angle.
+    pub cos_outer: f32,
+    /// Range after which the light is ignored.
+    pub range: f32,
+}
+
+/// A bright light source drawn with a glow halo after shading.
+#[derive(Debug, Clone, Copy)]
+pub struct Glow {
+    /// Camera-relative position.
+    pub pos: V3,
+    /// Colour and strength.
+    pub colour: super::math::Rgb,
+    /// Apparent size (m).
+    pub size: f32,
+}
+
+/// One frame ready for ray casting: camera, culled primitives and tile lists.
+pub struct FrameView<'w> {
+    /// The world.
+    pub world: &'w World,
+    /// Frame index.
+    pub frame: usize,
+    /// Camera.
+    pub cam: Camera,
+    /// Arc length of the camera (Frenet guess for the ground).
+    pub cam_s: f32,
+    /// Lateral offset of the camera from the centreline.
+    cam_d: f32,
+    /// Road tangent at the camera.
+    road_tangent: (f32, f32),
+    /// Road curvature at the camera.
+    road_kappa: f32,
+    /// Primitives of this frame.
+    pub prims: Vec<Prim>,
+    tiles_x: usize,
+    tiles_y: usize,
+    tile_start: Vec<u32>,
+    tile_items: Vec<u32>,
+    /// Night lights of this frame.
+    pub lights: Vec<Light>,
+    light_start: Vec<u32>,
+    light_items: Vec<u32>,
+    /// Glow sources.
+    pub glows: Vec<Glow>,
+    /// Ground-plane shadow offset per metre of height (sun), if the sun casts shadows.
+    pub shadow_step: Option<(f32, f32)>,
+}
+
+/// Screen rectangle of a set of camera-relative points, or `None` if all are behind, and
+/// the smallest depth of the points (0 if some are behind the camera).
+fn screen_rect(cam: &Camera, pts: &[V3]) -> Option<([f32; 4], f32)> {
+    let mut r = [
+        f32::INFINITY,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NEG_INFINITY,
+    ];
+    let mut behind = 0;
+    let mut near = f32::INFINITY;
+    for p in pts {
+        match cam.project_relative(*p) {
+            Some(q) => {
+                r[0] = r[0].min(q.u);
+                r[1] = r[1].min(q.v);
+                r[2] = r[2].max(q.u);
+                r[3] = r[3].max(q.v);
+                near = near.min(q.z);
+            }
+            None => behind += 1,
+        }
+    }
+    if behind == pts.len() {
+        return None;
+    }
+    if behind > 0 {
+        // Straddles the camera plane: be conservative.
+        return Some(([0.0, 0.0, cam.width as f32, cam.height_px as f32], 0.0));
+    }
+    Some(([r[0] - 1.0, r[1] - 1.0, r[2] + 1.0, r[3] + 1.0], near))
+}
+
+/// Whether a screen rectangle overlaps a `w × h` image.
+fn on_screen(r: &[f32; 4], w: usize, h: usize) -> bool {
+    r[0] < w as f32 && r[1] < h as f32 && r[2] > 0.0 && r[3] > 0.0
+}
+
+fn box_corners(origin: V3, c: f32, s: f32, lo: V3, hi: V3) -> [V3; 8] {
+    let mut out = [V3::default(); 8];
+    for (i, o) in out.iter_mut().enumerate() {
+        let p = V3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        );
+        *o = origin + p.rotate_z(c, s);
+    }
+    out
+}
+
+/// Builds compressed tile lists from per-item screen rectangles.
+fn bin(rects: &[[f32; 4]], tiles_x: usize, tiles_y: usize) -> (Vec<u32>, Vec<u32>) {
+    let n_tiles = tiles_x * tiles_y;
+    let span = |r: &[f32; 4]| {
+        let tx0 = (r[0] / TILE as f32).floor().max(0.0) as usize;
+        let ty0 = (r[1] / TILE as f32).floor().max(0.0) as usize;
+        let tx1 = ((r[2] / TILE as f32).floor().max(0.0) as usize).min(tiles_x - 1);
+        let ty1 = ((r[3] / TILE as f32).floor().max(0.0) as usize).min(tiles_y - 1);
+        (tx0, ty0, tx1, ty1)
+    };
+    let mut counts = vec![0u32; n_tiles + 1];
+    for r in rects {
+        let (tx0, ty0, tx1, ty1) = span(r);
+        for ty in ty0..=ty1 {
+            for tx in tx0..=tx1 {
+                counts[ty * tiles_x + tx + 1] += 1;
+            }
+        }
+    }
+    for i in 1..=n_tiles {
+        counts[i] += counts[i - 1];
+    }
+    let mut fill = counts.clone();
+    let mut items = vec![0u32; counts[n_tiles] as usize];
+    for (k, r) in rects.iter().enumerate() {
+        let (tx0, ty0, tx1, ty1) = span(r);
+        for ty in ty0..=ty1 {
+            for tx in tx0..=tx1 {
+                let t = ty * tiles_x + tx;
+                items[fill[t] as usize] = k as u32;
+                fill[t] += 1;
+            }
+        }
+    }
+    (counts, items)
+}
+
+impl<'w> FrameView<'w> {
+    /// Places the camera and the objects of frame `frame` and bins them into tiles.
+    pub fn new(world: &'w World, frame: usize) -> Self {
+        let states = &world.traffic.states[frame];
+        let ego = states[super::traffic::EGO];
+        let cam = Camera::new(&world.intrinsics, ego.x, ego.y, ego.yaw);
+        let w = cam.width as usize;
+        let h = cam.height_px as usize;
+        let tiles_x = w.div_ceil(TILE);
+        let tiles_y = h.div_ceil(TILE);
+        let highway = matches!(world.road.domain, Domain::Highway);
+        let draw = if highway { 700.0 } else { 260.0 };
+        let lighting = &world.lighting;
+        let shadow_step = (lighting.sun.luminance() > 0.5).then(|| {
+            let sd = lighting.sun_dir;
+            let k = 1.0 / sd.z.max(0.2);
+            (-sd.x * k, -sd.y * k)
+        });
+
+        let mut prims = Vec::new();
+        let mut rects = Vec::new();
+        let range = world.scenery.range(ego.s - 60.0, ego.s + draw);
+        for i in range {
+            let obj: &StaticObject = &world.scenery.objects[i];
+            let origin = cam.relative(obj.pos);
+            let (c, s) = (obj.yaw.cos(), obj.yaw.sin());
+            let (lo, hi) = obj.local_bounds();
+            if let Some((r, near)) = screen_rect(&cam, &box_corners(origin, c, s, lo, hi))
+                && on_screen(&r, w, h)
+            {
+                prims.push(Prim {
+                    what: PrimRef::Static(i as u32),
+                    origin,
+                    c,
+                    s,
+                    near,
+                    rect: r,
+                });
+                rects.push(r);
+            }
+        }
+        for (i, v) in world.traffic.vehicles.iter().enumerate() {
+            if i == super::traffic::EGO {
+                continue;
+            }
+            let st = &states[i];
+            let origin = cam.relative(V3::new(st.x, st.y, 0.0));
+            if origin.x.abs() > draw || origin.y.abs() > draw {
+                continue;
+            }
+            let (c, s) = (st.yaw.cos(), st.yaw.sin());
+            let (lo, hi) = v.model.bounds();
+            let mut pts = box_corners(origin, c, s, lo, hi).to_vec();
+            let body_rect = screen_rect(&cam, &pts)
+                .map_or([f32::INFINITY, f32::INFINITY, 0.0, 0.0], |(r, _)| r);
+            if let Some((kx, ky)) = shadow_step {
+                let hgt = v.model.height;
+                for p in box_corners(origin, c, s, lo, V3::new(hi.x, hi.y, 0.0))
+                    .iter()
+                    .take(4)
+                {
+                    pts.push(V3::new(p.x + kx * hgt, p.y + ky * hgt, 0.0));
+                }
+            }
+            // The contact shadow reaches a little beyond the footprint.
+            for p in box_corners(
+                origin,
+                c,
+                s,
+                lo - V3::new(0.6, 0.6, 0.0),
+                V3::new(hi.x + 0.6, hi.y + 0.6, 0.0),
+            )
+            .iter()
+            .take(4)
+            {
+                pts.push(*p);
+            }
+            if let Some((r, near)) = screen_rect(&cam, &pts)
+                && on_screen(&r, w, h)
+            {
+                prims.push(Prim {
+                    what: PrimRef::Vehicle(i as u32),
+                    origin,
+                    c,
+                    s,
+                    near,
+                    rect: body_rect,
+                });
+                rects.push(r);
+            }
+        }
+        let road_here = world.road.centerline.sample(ego.s);
+        let (tile_start, mut tile_items) = bin(&rects, tiles_x, tiles_y);
+        // Nearest first, so that tracing can stop at the first primitive beyond its hit.
+        for t in 0..tiles_x * tiles_y {
+            let items = &mut tile_items[tile_start[t] as usize..tile_start[t + 1] as usize];
+            items.sort_by(|&a, &b| {
+                prims[a as usize]
+                    .near
+                    .total_cmp(&prims[b as usize].near)
+                    .then(a.cmp(&b))
+            });
+        }
+        let mut view = FrameView {
+            world,
+            frame,
+            cam,
+            cam_s: ego.s,
+            cam_d: ego.d,
+            road_tangent: (road_here.tx, road_here.ty),
+            road_kappa: road_here.kappa,
+            prims,
+            tiles_x,
+            tiles_y,
+            tile_start,
+            tile_items,
+            lights: Vec::new(),
+            light_start: vec![0; tiles_x * tiles_y + 1],
+            light_items: Vec::new(),
+            glows: Vec::new(),
+            shadow_step,
+        };
+        super::shade::place_lights(&mut view);
+        let light_rects: Vec<[f32; 4]> = view
+            .lights
+            .iter()
+            .map(|l| {
+                let r = V3::new(l.range, l.range, l.range);
+                let lo = l.pos - r;
+                let hi = l.pos + r;
+                screen_rect(
+                    &view.cam,
+                    &box_corners(lo, 1.0, 0.0, V3::default(), hi - lo),
+                )
+                .map_or([-10.0, -10.0, -5.0, -5.0], |(r, _)| r)
+            })
+            .collect();
+        let (ls, li) = bin(&light_rects, tiles_x, tiles_y);
+        view.light_start = ls;
+        view.light_items = li;
+        view
+    }
+
+    /// Tile index of continuous image point (u, v).
+    #[inline]
+    pub fn tile_of(&self, u: f32, v: f32) -> usize {
+        let tx = ((u.max(0.0) as usize) / TILE).min(self.tiles_x - 1);
+        let ty = ((v.max(0.0) as usize) / TILE).min(self.tiles_y - 1);
+        ty * self.tiles_x + tx
+    }
+
+    /// Primitive indices of a tile.
+    #[inline]
+    pub fn tile_prims(&self, tile: usize) -> &[u32] {
+        &self.tile_items[self.tile_start[tile] as usize..self.tile_start[tile + 1] as usize]
+    }
+
+    /// Light indices of a tile.
+    #[inline]
+    pub fn tile_lights(&self, tile: usize) -> &[u32] {
+        &self.light_items[self.light_start[tile] as usize..self.light_start[tile + 1] as usize]
+    }
+
+    /// The nearest surface through continuous image point (u, v).
+    #[inline]
+    pub fn trace_point(&self, u: f32, v: f32) -> Hit {
+        self.trace(self.cam.ray(u, v), u, v)
+    }
+
+    /// Frenet coordinates of the camera-relative ground point at ray parameter `t`, starting
+    /// Newton's iteration at `guess` (or, if `None`, at a curvature-aware estimate from the
+    /// road's tangent at the camera).
+    #[inline]
+    fn frenet_at(&self, dir: V3, t: f32, guess: Option<f32>) -> (f32, f32) {
+        let (px, py) = (dir.x * t, dir.y * t);
+        let s0 = guess.unwrap_or_else(|| {
+            let (tx, ty) = self.road_tangent;
+            let along = px * tx + py * ty;
+            let across = -px * ty + py * tx + self.cam_d;
+            self.cam_s + along * (1.0 + self.road_kappa * across)
+        });
+        self.world
+            .road
+            .centerline
+            .to_frenet(self.cam.x + px, self.cam.y + py, s0)
+    }
+
+    /// Intersection with the ground: road plane, raised sidewalks and kerb faces.
+    fn ground(&self, dir: V3, s_hint: Option<f32>) -> Option<Hit> {
+        if dir.z >= -1e-6 {
+            return None;
+        }
+        let road = &self.world.road;
+        let h = self.cam.height;
+        let t0 = h / -dir.z;
+        let make = |t: f32, s: f32, d: f32, z: f32, part: u8, normal: V3| Hit {
+            t,
+            key: KEY_GROUND,
+            prim: u32::MAX,
+            part,
+            local: V3::new(s, d, z),
+            normal,
+        };
+        let up = V3::new(0.0, 0.0, 1.0);
+        if road.kerb_height <= 0.0 {
+            let (s, d) = self.frenet_at(dir, t0, s_hint);
+            return Some(make(t0, s, d, 0.0, 0, up));
+        }
+        let kh = road.kerb_height;
+        let t1 = (h - kh) / -dir.z;
+        let (s1, d1) = self.frenet_at(dir, t1, s_hint);
+        if road.is_raised(s1, d1) {
+            return Some(make(t1, s1, d1, kh, 0, up));
+        }
+        // Along the ray, s grows by about the horizontal distance travelled along the road.
+        let (tx, ty) = self.road_tangent;
+        let ds_dt = dir.x * tx + dir.y * ty;
+        let (s0, d0) = self.frenet_at(dir, t0, Some(s1 + (t0 - t1) * ds_dt));
+        if !road.is_raised(s0, d0) {
+            return Some(make(t0, s0, d0, 0.0, 0, up));
+        }
+        // The ray passes the kerb's height range over the road and lands on the raised
+        // level: it hits the kerb face in between.
+        let (mut lo, mut hi) = (t1, t0);
+        for _ in 0..14 {
+            let mid = 0.5 * (lo + hi);
+            let (s, d) = self.frenet_at(dir, mid, Some(s1 + (mid - t1) * ds_dt));
+            if road.is_raised(s, d) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        let (s, d) = self.frenet_at(dir, hi, Some(s1 + (hi - t1) * ds_dt));
+        let z = (h + dir.z * hi).clamp(0.0, kh);
+        Some(make(hi, s, d, z, 1, road.kerb_normal(s, d)))
+    }
+
+    /// The nearest surface along camera ray `dir` through image point (u, v) (`dir` is
+    /// `self.cam.ray(u, v)`).
+    pub fn trace(&self, dir: V3, u: f32, v: f32) -> Hit {
+        self.trace_in_tile(dir, u, v, self.tile_of(u, v), None)
+    }
+
+    /// [`FrameView::trace`] for a point known to lie in `tile`; `s_hint` is the arc length of
+    /// a nearby ground point (speeds up the Frenet inversion, same result).
+    pub fn trace_in_tile(&self, dir: V3, u: f32, v: f32, tile: usize, s_hint: Option<f32>) -> Hit {
+        let mut hit = self.ground(dir, s_hint).unwrap_or(Hit::sky(dir));
+        let o = self.cam.origin();
+        for &pi in self.tile_prims(tile) {
+            let prim = &self.prims[pi as usize];
+            if prim.near >= hit.t {
+                break;
+            }
+            let r = &prim.rect;
+            if u < r[0] || u > r[2] || v < r[1] || v > r[3] {
+                continue;
+            }
+            let ol = (o - prim.origin).unrotate_z(prim.c, prim.s);
+            let dl = dir.unrotate_z(prim.c, prim.s);
+            let found = match prim.what {
+                PrimRef::Static(i) => {
+                    intersect_static(&self.world.scenery.objects[i as usize], ol, dl, hit.t)
+                }
+                PrimRef::Vehicle(i) => intersect_vehicle(
+                    &self.world.traffic.vehicles[i as usize].model,
+                    ol,
+                    dl,
+                    hit.t,
+                ),
+            };
+            if let Some((t, part, n)) = found {
+                hit = Hit {
+                    t,
+                    key: prim.key(),
+                    prim: pi,
+                    part,
+                    local: ol + dl * t,
+                    normal: n,
+                };
+            }
+        }
+        if hit.key == KEY_SKY && self.backdrop(dir) {
+            hit.key = KEY_BACKDROP;
+        }
+        hit
+    }
+
+    /// Whether direction `dir` above the horizon meets the distant skyline or hills.
+    fn backdrop(&self, dir: V3) -> bool {
+        let horiz = (dir.x * dir.x + dir.y * dir.y).sqrt();
+        if dir.z < 0.0 || horiz <= 0.0 {
+            return dir.z < 0.0;
+        }
+        let elevation = dir.z / horiz;
+        elevation < BACKDROP_MAX && elevation < self.world.backdrop_at(dir.y.atan2(dir.x))
+    }
+}
+
+/// Largest value [`backdrop_height`] returns.
+pub const BACKDROP_MAX: f32 = 0.09;
+
+/// Tangent of the elevation of the distant skyline (city) or hills (highway) at world
+/// azimuth `az`.
+pub fn backdrop_height(domain: Domain, az: f32, salt: u32) -> f32 {
+    match domain {
+        Domain::Highway => {
+            let x = az * 9.0;
+            0.012 + 0.05 * value2(x, 0.5, salt) + 0.02 * value2(x * 3.1, 1.5, salt ^ 7)
+        }
+        _ => {
+            let bin = (az * 60.0).floor();
+            let u = super::rng::unit1(bin as i32, salt);
+            if u < 0.3 { 0.0 } else { 0.01 + 0.07 * u * u }
+        }
+    }
+}
+
+/// Slab test of an axis-aligned box: (t, face normal).
+#[inline]
+fn slab(o: V3, d: V3, lo: V3, hi: V3, t_max: f32) -> Option<(f32, V3)> {
+    let mut t0 = 1e-4f32;
+    let mut t1 = t_max;
+    let mut n = V3::default();
+    for axis in 0..3 {
+        let (oa, da, la, ha) = match axis {
+            0 => (o.x, d.x, lo.x, hi.x),
+            1 => (o.y, d.y, lo.y, hi.y),
+            _ => (o.z, d.z, lo.z, hi.z),
+        };
+        if da.abs() < 1e-12 {
+            if oa < la || oa > ha {
+                return None;
+            }
+            continue;
+        }
+        let inv = 1.0 / da;
+        let (mut ta, mut tb) = ((la - oa) * inv, (ha - oa) * inv);
+        let mut sign = -1.0;
+        if ta > tb {
+            std::mem::swap(&mut ta, &mut tb);
+            sign = 1.0;
+        }
+        if ta > t0 {
+            t0 = ta;
+            n = match axis {
+                0 => V3::new(sign, 0.0, 0.0),
+                1 => V3::new(0.0, sign, 0.0),
+                _ => V3::new(0.0, 0.0, sign),
+            };
+        }
+        t1 = t1.min(tb);
+        if t0 > t1 {
+            return None;
+        }
+    }
+    if n == V3::default() {
+        None
+    } else {
+        Some((t0, n))
+    }
+}
+
+/// Ray-static-object intersection in object-local coordinates.
+pub fn intersect_static(obj: &StaticObject, o: V3, d: V3, t_max: f32) -> Option<(f32, u8, V3)> {
+    match obj.shape {
+        Shape::Box { hx, hy, z0, z1 } => {
+            slab(o, d, V3::new(-hx, -hy, z0), V3::new(hx, hy, z1), t_max).map(|(t, n)| (t, 0, n))
+        }
+        Shape::Cylinder { r, z0, z1 } => {
+            let a = d.x * d.x + d.y * d.y;
+            if a > 1e-12 {
+                let b = o.x * d.x + o.y * d.y;
+                let c = o.x * o.x + o.y * o.y - r * r;
+                let disc = b * b - a * c;
+                if disc >= 0.0 {
+                    let t = (-b - disc.sqrt()) / a;
+                    let z = o.z + t * d.z;
+                    if t > 1e-4 && t < t_max && z >= z0 && z <= z1 {
+                        let p = o + d * t;
+                        return Some((t, 0, V3::new(p.x / r, p.y / r, 0.0)));
+                    }
+                }
+            }
+            if d.z < 0.0 {
+                let t = (z1 - o.z) / d.z;
+                let p = o + d * t;
+                if t > 1e-4 && t < t_max && p.x * p.x + p.y * p.y <= r * r {
+                    return Some((t, 0, V3::new(0.0, 0.0, 1.0)));
+                }
+            }
+            None
+        }
+        Shape::Ellipsoid { rx, ry, rz, zc } => {
+            let os = V3::new(o.x / rx, o.y / ry, (o.z - zc) / rz);
+            let ds = V3::new(d.x / rx, d.y / ry, d.z / rz);
+            let a = ds.dot(ds);
+            let b = os.dot(ds);
+            let c = os.dot(os) - 1.0;
+            let disc = b * b - a * c;
+            if disc < 0.0 {
+                return None;
+            }
+            let t = (-b - disc.sqrt()) / a;
+            if t <= 1e-4 || t >= t_max {
+                return None;
+            }
+            let p = o + d * t;
+            let n = V3::new(p.x / (rx * rx), p.y / (ry * ry), (p.z - zc) / (rz * rz)).normalized();
+            Some((t, 0, n))
+        }
+        Shape::Panel { hx, h } => {
+            if d.y.abs() < 1e-9 {
+                return None;
+            }
+            let t = -o.y / d.y;
+            if t <= 1e-4 || t >= t_max {
+                return None;
+            }
+            let x = o.x + t * d.x;
+            let z = o.z + t * d.z;
+            if x.abs() > hx || z < 0.0 || z > h {
+                return None;
+            }
+            if !panel_solid(obj, x, z) {
+                return None;
+            }
+            Some((t, 0, V3::new(0.0, -d.y.signum(), 0.0)))
+        }
+    }
+}
+
+/// Cut-outs of panels: gaps between guard-rail posts, the ragged top of tree lines.
+#[inline]
+pub fn panel_solid(obj: &StaticObject, x: f32, z: f32) -> bool {
+    match obj.kind {
+        StaticKind::GuardRail => z >= 0.42 || super::math::wrap(x + 40.0, 2.0) < 0.14,
+        StaticKind::TreeLine => {
+            let Shape::Panel { h, .. } = obj.shape else {
+                return true;
+            };
+            // A row of crowns: rounded bumps on every 3.5 m with random heights, on top of a
+            // slowly varying canopy height.
+            let salt = obj.salt;
+            let canopy = h * (0.6 + 0.4 * value2(x / 9.0, 0.0, salt));
+            let cell = super::math::floor(x / 3.5);
+            let mut top: f32 = 0.0;
+            for k in [cell - 1.0, cell, cell + 1.0] {
+                let jitter = super::rng::unit1(k as i32, salt);
+                let centre = (k + 0.5 + 0.6 * (jitter - 0.5)) * 3.5;
+                let radius = 2.2 + 1.2 * jitter;
+                let dx = (x - centre) / radius;
+                if dx.abs() < 1.0 {
+                    let crown =
+                        canopy * (0.8 + 0.25 * jitter) + radius * (1.0 - dx * dx).sqrt() - radius;
+                    top = top.max(crown);
+                }
+            }
+            z < top
+        }
+        _ => true,
+    }
+}
+
+/// Ray-vehicle intersection in vehicle-local coordinates: (t, part, local normal).
+pub fn intersect_vehicle(m: &VehicleModel, o: V3, d: V3, t_max: f32) -> Option<(f32, u8, V3)> {
+    let (lo, hi) = m.bounds();
+    slab(o, d, lo, hi, t_max)?;
+    let mut best: Option<(f32, u8, V3)> = None;
+    let mut limit = t_max;
+    for (k, part) in m.parts.iter().enumerate() {
+        if let Some((t, plane)) = part.intersect(o, d, 1e-4, limit) {
+            limit = t;
+            best = Some((t, k as u8, part.planes[plane as usize].n));
+        }
+    }
+    for (k, w) in m.wheels.iter().enumerate() {
+        if let Some((t, n)) = intersect_wheel(w, o, d, limit) {
+            limit = t;
+            best = Some((t, WHEEL_PART + k as u8, n));
+        }
+    }
+    best
+}
+
+fn intersect_wheel(w: &super::vehicle::Wheel, o: V3, d: V3, t_max: f32) -> Option<(f32, V3)> {
+    let ox = o.x - w.x;
+    let oz = o.z - w.r;
+    let mut best: Option<(f32, V3)> = None;
+    let a = d.x * d.x + d.z * d.z;
+    if a > 1e-12 {
+        let b = ox * d.x + oz * d.z;
+        let c = ox * ox + oz * oz - w.r * w.r;
+        let disc = b * b - a * c;
+        if disc >= 0.0 {
+            let t = (-b - disc.sqrt()) / a;
+            let y = o.y + t * d.y;
+            if t > 1e-4 && t < t_max && y >= w.y0 && y <= w.y1 {
+                let px = ox + t * d.x;
+                let pz = oz + t * d.z;
+                best = Some((t, V3::new(px / w.r, 0.0, pz / w.r)));
+            }
+        }
+    }
+    // The outer side wall.
+    let outer = if w.y0 > 0.0 { w.y1 } else { w.y0 };
+    if d.y.abs() > 1e-9 {
+        let t = (outer - o.y) / d.y;
+        let px = ox + t * d.x;
+        let pz = oz + t * d.z;
+        let facing = (outer > 0.0 && d.y < 0.0) || (outer < 0.0 && d.y > 0.0);
+        if facing && t > 1e-4 && t < best.map_or(t_max, |b| b.0) && px * px + pz * pz <= w.r * w.r {
+            best = Some((t, V3::new(0.0, outer.signum(), 0.0)));
+        }
+    }
+    best
+}

@@ -1,0 +1,534 @@
+//! The three training stages of HF²-VAD (spec §5) over a [`CubeSet`], with per-epoch
+//! checkpoints, resume, model selection on held-out normal cubes and the final training
+//! statistics.
+//!
+//! Output folder layout:
+//!
+//! | file | content |
+//! |---|---|
+//! | `state.json` | progress: stage, next epoch, best validation loss, RNG state, summaries |
+//! | `last_model.bpk`, `last_optim.bpk` | model and Adam state after the last finished epoch |
+//! | `stage{1,2,3}_best.bpk` | the model at the best validation epoch of each stage |
+//! | `model.safetensors` | the final vadscope checkpoint (config, training statistics) |
+//!
+//! Burnpack keeps parameter ids, which the optimizer state is keyed by; that is why resume
+//! files are burnpack while the deliverable is a safetensors checkpoint.
+
+use std::path::{Path, PathBuf};
+
+use burn::module::Module;
+use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
+use burn::store::{BurnpackStore, ModuleSnapshot};
+use burn::tensor::{Device, Tensor};
+use serde::{Deserialize, Serialize};
+
+use crate::model::inference::to_model_conventions;
+use crate::model::layers::tensor;
+use crate::model::losses::{stage1_loss, stage2_loss, stage3_loss};
+use crate::model::{
+    CheckpointMeta, Detector, Hf2Vad, Latents, ModelConfig, NoiseRng, StatsAccumulator,
+    TrainingStats, save_checkpoint,
+};
+
+use super::config::TrainConfig;
+use super::cubes::CubeSet;
+use super::error::TrainError;
+
+/// Progress reported to the caller.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TrainEvent {
+    /// A stage begins (or resumes) at `first_epoch`.
+    StageStarted {
+        /// Stage number (1–3).
+        stage: usize,
+        /// First epoch that will run (0-based; > 0 after a resume).
+        first_epoch: usize,
+        /// Total epochs of the stage.
+        epochs: usize,
+        /// Optimiser steps per epoch.
+        steps_per_epoch: usize,
+    },
+    /// One optimiser step finished.
+    Step {
+        /// Stage number.
+        stage: usize,
+        /// Epoch (0-based).
+        epoch: usize,
+        /// Step within the epoch (0-based).
+        step: usize,
+        /// Total loss of the batch.
+        loss: f64,
+    },
+    /// An epoch finished and was checkpointed.
+    EpochDone {
+        /// Stage number.
+        stage: usize,
+        /// Epoch (0-based).
+        epoch: usize,
+        /// Mean training loss of the epoch.
+        train_loss: f64,
+        /// Mean validation loss (None without validation cubes).
+        val_loss: Option<f64>,
+        /// Learning rate used.
+        lr: f64,
+        /// Whether this epoch is the best of the stage so far.
+        best: bool,
+    },
+    /// The training statistics were computed.
+    StatsDone(TrainingStats),
+}
+
+/// Outcome of one stage.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StageSummary {
+    /// Epochs run.
+    pub epochs: usize,
+    /// Epoch whose model was kept (0-based).
+    pub best_epoch: usize,
+    /// Its validation loss (training loss when there was no validation data).
+    pub best_loss: f64,
+    /// Mean training loss of the last epoch.
+    pub last_train_loss: f64,
+}
+
+/// Outcome of a whole training run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrainReport {
+    /// The final checkpoint (`model.safetensors` in the output folder).
+    pub checkpoint: PathBuf,
+    /// Training statistics stored in it.
+    pub stats: TrainingStats,
+    /// Per-stage outcomes (None for a stage with 0 epochs).
+    pub stages: [Option<StageSummary>; 3],
+    /// Cubes used for training and for validation.
+    pub split: (usize, usize),
+}
+
+/// Persistent progress of a run (`state.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+struct TrainState {
+    model_config: ModelConfig,
+    train_config: TrainConfig,
+    cubes: usize,
+    stage: usize,
+    next_epoch: usize,
+    best_loss: Option<f64>,
+    best_epoch: usize,
+    rng_state: u64,
+    summaries: [Option<StageSummary>; 3],
+}
+
+const STATE: &str = "state.json";
+const LAST_MODEL: &str = "last_model.bpk";
+const LAST_OPTIM: &str = "last_optim.bpk";
+const FINAL: &str = "model.safetensors";
+
+fn best_file(stage: usize) -> String {
+    format!("stage{stage}_best.bpk")
+}
+
+/// Trains a model of `model_config` on the normal cubes `data` through the three stages,
+/// writing checkpoints to `out_dir` and resuming from them when the folder holds an
+/// unfinished run of the same configuration.
+pub fn train(
+    model_config: &ModelConfig,
+    train_config: &TrainConfig,
+    data: &CubeSet,
+    out_dir: &Path,
+    on_event: &mut dyn FnMut(&TrainEvent),
+) -> Result<TrainReport, TrainError> {
+    model_config.validate()?;
+    check_inputs(model_config, train_config, data)?;
+    std::fs::create_dir_all(out_dir).map_err(|e| TrainError::io(out_dir, e))?;
+    let (train_idx, val_idx) = data.split(train_config.val_fraction, train_config.seed);
+    let device = Device::flex().autodiff();
+
+    let mut state = match read_state(out_dir)? {
+        Some(state) => {
+            if state.model_config != *model_config
+                || state.train_config != *train_config
+                || state.cubes != data.len()
+            {
+                return Err(TrainError::Config(format!(
+                    "{} holds a run with another model config, training config or data set; \
+                     use an empty folder",
+                    out_dir.display()
+                )));
+            }
+            state
+        }
+        None => TrainState {
+            model_config: model_config.clone(),
+            train_config: train_config.clone(),
+            cubes: data.len(),
+            stage: 1,
+            next_epoch: 0,
+            best_loss: None,
+            best_epoch: 0,
+            rng_state: NoiseRng::new(train_config.seed ^ 0x5EED).state(),
+            summaries: [None, None, None],
+        },
+    };
+
+    let mut init_rng = NoiseRng::new(train_config.seed);
+    let mut model = Hf2Vad::new(model_config, &device, &mut init_rng)?;
+    let resuming = out_dir.join(LAST_MODEL).is_file() && state.next_epoch > 0;
+    if resuming {
+        load_model(&mut model, &out_dir.join(LAST_MODEL))?;
+    } else if let Some(previous) = (1..state.stage)
+        .rev()
+        .map(|s| out_dir.join(best_file(s)))
+        .find(|p| p.is_file())
+    {
+        load_model(&mut model, &previous)?;
+    }
+
+    let ctx = Context {
+        model_config,
+        train_config,
+        data,
+        train_idx: &train_idx,
+        val_idx: &val_idx,
+        out_dir,
+        device: &device,
+    };
+    while state.stage <= 3 {
+        let stage = state.stage;
+        let settings = train_config.stage(stage);
+        let mut optim = AdamConfig::new()
+            .with_epsilon(train_config.adam_epsilon as f32)
+            .init();
+        if state.next_epoch > 0 {
+            optim = optim
+                .load(out_dir.join(LAST_OPTIM))
+                .map_err(|e| TrainError::file(out_dir.join(LAST_OPTIM), e))?;
+        }
+        model = prepare_for_stage(model, stage);
+        if settings.epochs > 0 {
+            model = ctx.run_stage(stage, model, &mut optim, &mut state, on_event)?;
+        }
+        // The next stage starts from this stage's best model (or carries on unchanged if the
+        // stage was skipped).
+        if settings.epochs > 0 {
+            load_model(&mut model, &out_dir.join(best_file(stage)))?;
+        }
+        state.stage += 1;
+        state.next_epoch = 0;
+        state.best_loss = None;
+        state.best_epoch = 0;
+        write_state(out_dir, &state)?;
+    }
+
+    let model = model.valid();
+    let stats = ctx.training_statistics(&model)?;
+    on_event(&TrainEvent::StatsDone(stats));
+    let checkpoint = out_dir.join(FINAL);
+    let note = format!(
+        "trained by vadscope: seed {}, {} training / {} validation cubes",
+        train_config.seed,
+        train_idx.len(),
+        val_idx.len()
+    );
+    let meta = CheckpointMeta {
+        config: model_config.clone(),
+        stats: Some(stats),
+        note: Some(note),
+    };
+    save_checkpoint(&checkpoint, &model, &meta)?;
+    Ok(TrainReport {
+        checkpoint,
+        stats,
+        stages: state.summaries,
+        split: (train_idx.len(), val_idx.len()),
+    })
+}
+
+fn check_inputs(
+    model: &ModelConfig,
+    train: &TrainConfig,
+    data: &CubeSet,
+) -> Result<(), TrainError> {
+    if data.patch() != model.patch_size || data.clip_hist() != model.clip_hist {
+        return Err(TrainError::Data(format!(
+            "cubes are {}×{} with {} past frames; the model wants {}×{} with {}",
+            data.patch(),
+            data.patch(),
+            data.clip_hist(),
+            model.patch_size,
+            model.patch_size,
+            model.clip_hist
+        )));
+    }
+    if data.len() < 2 {
+        return Err(TrainError::Data(format!(
+            "{} cubes; at least 2 are needed",
+            data.len()
+        )));
+    }
+    for n in 1..=3 {
+        let s = train.stage(n);
+        if s.batch_size == 0 || !(s.lr.is_finite() && s.lr > 0.0) {
+            return Err(TrainError::Config(format!(
+                "stage {n}: batch size must be positive and the learning rate positive and finite"
+            )));
+        }
+    }
+    if !(0.0..1.0).contains(&train.val_fraction) || train.eval_batch == 0 {
+        return Err(TrainError::Config(
+            "val_fraction must be in [0, 1) and eval_batch positive".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// Stage 2 trains the CVAE alone: ML-MemAE-SC frozen, BatchNorm on running statistics.
+/// Stages 1 and 3 train with everything unfrozen.
+fn prepare_for_stage(mut model: Hf2Vad, stage: usize) -> Hf2Vad {
+    model.memae = if stage == 2 {
+        model.memae.freeze()
+    } else {
+        model.memae.unfreeze()
+    };
+    model
+}
+
+fn load_model(model: &mut Hf2Vad, path: &Path) -> Result<(), TrainError> {
+    let mut store = BurnpackStore::from_file(path);
+    model
+        .load_from(&mut store)
+        .map_err(|e| TrainError::file(path, e))?;
+    Ok(())
+}
+
+fn save_model(model: &Hf2Vad, path: &Path) -> Result<(), TrainError> {
+    // valid() folds pending BatchNorm running-stat updates in and keeps parameter ids.
+    let mut store = BurnpackStore::from_file(path).overwrite(true);
+    model
+        .valid()
+        .save_into(&mut store)
+        .map_err(|e| TrainError::file(path, e))
+}
+
+fn read_state(dir: &Path) -> Result<Option<TrainState>, TrainError> {
+    let path = dir.join(STATE);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(&path).map_err(|e| TrainError::io(&path, e))?;
+    serde_json::from_str(&text)
+        .map(Some)
+        .map_err(|e| TrainError::file(&path, format!("unreadable training state: {e}")))
+}
+
+fn write_state(dir: &Path, state: &TrainState) -> Result<(), TrainError> {
+    let path = dir.join(STATE);
+    let scratch = dir.join("state.json.partial");
+    let text = serde_json::to_string_pretty(state).map_err(|e| TrainError::io(&path, e))?;
+    std::fs::write(&scratch, text).map_err(|e| TrainError::io(&scratch, e))?;
+    std::fs::rename(&scratch, &path).map_err(|e| TrainError::io(&path, e))
+}
+
+/// Scalar value of a loss tensor.
+fn scalar(t: Tensor<1>) -> f64 {
+    t.into_scalar::<f32>() as f64
+}
+
+struct Context<'a> {
+    model_config: &'a ModelConfig,
+    train_config: &'a TrainConfig,
+    data: &'a CubeSet,
+    train_idx: &'a [usize],
+    val_idx: &'a [usize],
+    out_dir: &'a Path,
+    device: &'a Device,
+}
+
+/// A batch as model-ready tensors.
+struct Batch {
+    frames: Tensor<4>,
+    flows: Tensor<4>,
+    len: usize,
+}
+
+impl Context<'_> {
+    fn batch(&self, indices: &[usize], device: &Device) -> Batch {
+        let c = self.model_config;
+        let p = c.patch_size;
+        let (frames, flows) = self.data.gather(indices);
+        let (frames, flows) = to_model_conventions(c, &frames, &flows);
+        let n = indices.len();
+        Batch {
+            frames: tensor(frames, [n, c.cube_frame_channels(), p, p], device),
+            flows: tensor(flows, [n, c.cube_flow_channels(), p, p], device),
+            len: n,
+        }
+    }
+
+    fn run_stage(
+        &self,
+        stage: usize,
+        mut model: Hf2Vad,
+        optim: &mut ModuleOptimizer,
+        state: &mut TrainState,
+        on_event: &mut dyn FnMut(&TrainEvent),
+    ) -> Result<Hf2Vad, TrainError> {
+        let settings = self.train_config.stage(stage);
+        let full_steps = self.train_idx.len().div_ceil(settings.batch_size);
+        let steps = settings
+            .max_steps_per_epoch
+            .map_or(full_steps, |m| m.min(full_steps));
+        on_event(&TrainEvent::StageStarted {
+            stage,
+            first_epoch: state.next_epoch,
+            epochs: settings.epochs,
+            steps_per_epoch: steps,
+        });
+        let mut rng = NoiseRng::from_state(state.rng_state);
+        for epoch in state.next_epoch..settings.epochs {
+            let lr = settings.schedule.rate(settings.lr, epoch);
+            let mut order = self.train_idx.to_vec();
+            rng.shuffle(&mut order);
+            let mut loss_sum = 0.0;
+            let mut seen = 0;
+            for (step, chunk) in order.chunks(settings.batch_size).take(steps).enumerate() {
+                let batch = self.batch(chunk, self.device);
+                let (next, loss) = self.train_step(stage, model, optim, lr, batch, &mut rng);
+                model = next;
+                if !loss.is_finite() {
+                    return Err(TrainError::Data(format!(
+                        "stage {stage} epoch {epoch} step {step}: loss became {loss}"
+                    )));
+                }
+                loss_sum += loss * chunk.len() as f64;
+                seen += chunk.len();
+                on_event(&TrainEvent::Step {
+                    stage,
+                    epoch,
+                    step,
+                    loss,
+                });
+            }
+            let train_loss = loss_sum / seen.max(1) as f64;
+            let val_loss = self.validation_loss(stage, &model);
+            let score = val_loss.unwrap_or(train_loss);
+            let best = state.best_loss.is_none_or(|b| score < b);
+            if best {
+                state.best_loss = Some(score);
+                state.best_epoch = epoch;
+                save_model(&model, &self.out_dir.join(best_file(stage)))?;
+            }
+            save_model(&model, &self.out_dir.join(LAST_MODEL))?;
+            let optim_path = self.out_dir.join(LAST_OPTIM);
+            optim
+                .save(&optim_path)
+                .map_err(|e| TrainError::file(&optim_path, e))?;
+            state.next_epoch = epoch + 1;
+            state.rng_state = rng.state();
+            state.summaries[stage - 1] = Some(StageSummary {
+                epochs: epoch + 1,
+                best_epoch: state.best_epoch,
+                best_loss: state.best_loss.unwrap_or(score),
+                last_train_loss: train_loss,
+            });
+            write_state(self.out_dir, state)?;
+            on_event(&TrainEvent::EpochDone {
+                stage,
+                epoch,
+                train_loss,
+                val_loss,
+                lr,
+                best,
+            });
+        }
+        Ok(model)
+    }
+
+    /// One optimiser step of `stage`; returns the updated model and the batch loss.
+    fn train_step(
+        &self,
+        stage: usize,
+        mut model: Hf2Vad,
+        optim: &mut ModuleOptimizer,
+        lr: f64,
+        batch: Batch,
+        rng: &mut NoiseRng,
+    ) -> (Hf2Vad, f64) {
+        let w = &self.train_config.loss;
+        let c = self.model_config;
+        match stage {
+            1 => {
+                let last = batch.flows.narrow(1, 2 * (c.num_flows - 1), 2);
+                let out = model.memae.forward(last.clone());
+                let loss = stage1_loss(&out, last, w).total;
+                let grads = GradientsParams::from_grads(loss.backward(), &model.memae);
+                model.memae = optim.step(lr, model.memae, grads);
+                (model, scalar(loss))
+            }
+            _ => {
+                let latents = Latents::sampled(c, batch.len, self.device, rng);
+                let target = batch.frames.clone().narrow(1, 3 * c.clip_hist, 3);
+                let out = model.forward(batch.frames, batch.flows.clone(), &latents, Some(rng));
+                if stage == 2 {
+                    let loss = stage2_loss(&out, target, w).total;
+                    let grads = GradientsParams::from_grads(loss.backward(), &model.vunet);
+                    model.vunet = optim.step(lr, model.vunet, grads);
+                    (model, scalar(loss))
+                } else {
+                    let loss = stage3_loss(&out, batch.flows, target, w).total;
+                    let grads = GradientsParams::from_grads(loss.backward(), &model);
+                    let model = optim.step(lr, model, grads);
+                    (model, scalar(loss))
+                }
+            }
+        }
+    }
+
+    /// Mean stage loss over the validation cubes in eval mode (posterior means, no dropout,
+    /// BatchNorm running statistics); None without validation cubes.
+    fn validation_loss(&self, stage: usize, model: &Hf2Vad) -> Option<f64> {
+        if self.val_idx.is_empty() {
+            return None;
+        }
+        let eval = model.valid();
+        let device = Device::flex();
+        let w = &self.train_config.loss;
+        let c = self.model_config;
+        let mut sum = 0.0;
+        for chunk in self.val_idx.chunks(self.train_config.eval_batch) {
+            let batch = self.batch(chunk, &device);
+            let loss = if stage == 1 {
+                let last = batch.flows.narrow(1, 2 * (c.num_flows - 1), 2);
+                stage1_loss(&eval.memae.forward(last.clone()), last, w).total
+            } else {
+                let target = batch.frames.clone().narrow(1, 3 * c.clip_hist, 3);
+                let out = eval.forward(batch.frames, batch.flows.clone(), &Latents::Mean, None);
+                if stage == 2 {
+                    stage2_loss(&out, target, w).total
+                } else {
+                    stage3_loss(&out, batch.flows, target, w).total
+                }
+            };
+            sum += scalar(loss) * chunk.len() as f64;
+        }
+        Some(sum / self.val_idx.len() as f64)
+    }
+
+    /// S_r/S_p moments and pixel-error quantiles of `model` over the training cubes.
+    fn training_statistics(&self, model: &Hf2Vad) -> Result<TrainingStats, TrainError> {
+        let meta = CheckpointMeta {
+            config: self.model_config.clone(),
+            stats: None,
+            note: None,
+        };
+        let detector = Detector::new(model.clone(), meta, &Device::flex())?
+            .with_max_batch(self.train_config.eval_batch);
+        let mut acc = StatsAccumulator::new(self.train_config.pixel_sample, self.train_config.seed);
+        for chunk in self.train_idx.chunks(self.train_config.eval_batch) {
+            let (frames, flows) = self.data.gather(chunk);
+            for cube in detector.infer(&frames, &flows)? {
+                acc.push(cube.s_r, cube.s_p, &cube.flow_error, &cube.frame_error);
+            }
+        }
+        Ok(acc.finish())
+    }
+}

@@ -1,0 +1,156 @@
+//! The `vadscope` binary end to end: `generate` writes scenarios that `inspect` reads back,
+//! and bad paths or arguments fail with a message instead of a panic.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn vadscope(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vadscope"))
+        .args(args)
+        .output()
+        .expect("the vadscope binary runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+#[test]
+fn generate_then_inspect_round_trip() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().to_str().unwrap();
+    let gen_args = [
+        "generate",
+        "--out",
+        out,
+        "--kind",
+        "normal",
+        "--domain",
+        "city",
+        "--weather",
+        "sun",
+        "--frames",
+        "12",
+        "--size",
+        "96x64",
+        "--seed",
+        "3",
+    ];
+    let generated = vadscope(&gen_args);
+    assert!(
+        generated.status.success(),
+        "generate failed: {}",
+        text(&generated.stderr)
+    );
+
+    let scenarios: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("Scenario_")
+        })
+        .collect();
+    assert_eq!(scenarios.len(), 1);
+    for folder in [
+        "RGB_IMG",
+        "SEMANTIC_IMG",
+        "INSTANCE_IMG",
+        "DEPTH_IMG",
+        "OPTICAL_FLOW",
+        "ACTION",
+    ] {
+        let n = std::fs::read_dir(scenarios[0].join(folder))
+            .unwrap()
+            .count();
+        assert_eq!(n, 12, "{folder} should hold one file per frame");
+    }
+
+    let again = vadscope(&gen_args);
+    assert!(
+        !again.status.success(),
+        "existing scenarios must not be overwritten silently"
+    );
+    assert!(text(&again.stderr).contains("already exists"));
+
+    let inspected = vadscope(&["inspect", out, "--json"]);
+    assert!(
+        inspected.status.success(),
+        "inspect failed: {}",
+        text(&inspected.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&inspected.stdout).unwrap();
+    let summary = &report["scenarios"][0]["summary"];
+    assert_eq!(summary["frames"], 12, "{summary}");
+
+    let human = vadscope(&["inspect", scenarios[0].to_str().unwrap()]);
+    assert!(human.status.success());
+    assert!(
+        text(&human.stdout).contains("96"),
+        "text report names the size"
+    );
+}
+
+#[test]
+fn inspect_fails_cleanly_without_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let empty = dir.path().join("Scenario_empty");
+    std::fs::create_dir_all(empty.join("RGB_IMG")).unwrap();
+    let out = vadscope(&["inspect", dir.path().to_str().unwrap()]);
+    assert!(!out.status.success());
+    let all = text(&out.stdout) + &text(&out.stderr);
+    assert!(all.contains("Scenario_empty"), "names the folder: {all}");
+    assert!(!all.contains("panicked"));
+
+    let missing = vadscope(&[
+        "inspect",
+        Path::new("/nonexistent/vadscope").to_str().unwrap(),
+    ]);
+    assert!(!missing.status.success());
+    assert!(text(&missing.stderr).contains("/nonexistent/vadscope"));
+}
+
+#[test]
+fn generate_rejects_bad_sizes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = vadscope(&[
+        "generate",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--size",
+        "96by64",
+    ]);
+    assert!(!out.status.success());
+    assert!(text(&out.stderr).contains("WIDTHxHEIGHT"));
+}
+
+#[test]
+fn omitted_modalities_are_not_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = vadscope(&[
+        "generate",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--kind",
+        "normal",
+        "--frames",
+        "3",
+        "--size",
+        "64x48",
+        "--omit",
+        "depth,flow",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let scenario = std::fs::read_dir(dir.path())
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    assert!(scenario.join("RGB_IMG").is_dir());
+    assert!(scenario.join("SEMANTIC_IMG").is_dir());
+    assert!(!scenario.join("DEPTH_IMG").exists());
+    assert!(!scenario.join("OPTICAL_FLOW").exists());
+}

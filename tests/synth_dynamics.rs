@@ -1,0 +1,176 @@
+//! The traffic of the synthetic generator behaves as its scenario kind says: normal traffic
+//! never brakes harder than the normal bound, the braking lead brakes hard to a standstill,
+//! nobody collides, the lead of a turning scenario leaves the ego lane and a cut-in vehicle
+//! enters it.
+
+use vadscope::sequence::{Domain, Weather};
+use vadscope::synth::{
+    EGO, LEAD, NORMAL_DECEL_LIMIT, Role, Scenario, ScenarioKind, ScenarioSpec, first_collision,
+    max_decel,
+};
+
+fn build(kind: ScenarioKind, domain: Domain, seed: u64) -> Scenario {
+    let mut s = ScenarioSpec::new(kind, domain, Weather::Sun, seed);
+    s.width = 64;
+    s.height = 48;
+    Scenario::build(&s).expect("build")
+}
+
+#[test]
+fn normal_traffic_never_brakes_beyond_the_normal_bound_and_never_collides() {
+    for seed in 0..3 {
+        for domain in [Domain::City, Domain::Highway] {
+            let sc = build(ScenarioKind::Normal, domain, seed);
+            let t = sc.traffic();
+            assert_eq!(t.states.len(), 200);
+            for i in 0..t.vehicles.len() {
+                let d = max_decel(t, i);
+                assert!(
+                    d <= NORMAL_DECEL_LIMIT + 1e-3,
+                    "{domain:?} seed {seed}: vehicle {i} brakes at {d}"
+                );
+            }
+            assert!(
+                first_collision(t).is_none(),
+                "{domain:?} seed {seed}: collision"
+            );
+            assert!(sc.anomaly_window().is_none());
+            // The ego really drives.
+            let travelled = t.states[199][EGO].s - t.states[0][EGO].s;
+            assert!(
+                travelled > 15.0,
+                "{domain:?} seed {seed}: ego moved {travelled} m"
+            );
+        }
+    }
+}
+
+#[test]
+fn braking_lead_stops_hard_and_the_ego_stops_behind_it() {
+    for seed in 0..3 {
+        for domain in [Domain::City, Domain::Highway] {
+            let sc = build(ScenarioKind::Braking, domain, seed);
+            let t = sc.traffic();
+            let w = sc.anomaly_window().expect("window");
+            assert!((100..=130).contains(&w.start), "onset at frame {}", w.start);
+            assert!(max_decel(t, LEAD) >= 7.0);
+            assert!(t.states[w.start as usize][LEAD].speed > 5.0);
+            assert_eq!(t.states[w.end as usize][LEAD].speed, 0.0);
+            assert!(t.states[w.end as usize - 1][LEAD].speed > 0.0);
+            for k in 0..t.states.len() {
+                assert_eq!(
+                    t.states[k][LEAD].brake == 1.0,
+                    w.contains(k as u32),
+                    "brake at {k}"
+                );
+            }
+            for i in 0..t.vehicles.len() {
+                if i != LEAD && i != EGO {
+                    assert!(max_decel(t, i) <= NORMAL_DECEL_LIMIT + 1e-3);
+                }
+            }
+            assert!(
+                first_collision(t).is_none(),
+                "{domain:?} seed {seed}: collision"
+            );
+            // The ego ends up behind the lead with a gap, never through it.
+            let gap_min = t
+                .states
+                .iter()
+                .map(|st| st[LEAD].s - st[EGO].s)
+                .fold(f32::INFINITY, f32::min);
+            let lengths = 0.5 * (t.vehicles[LEAD].model.length + t.vehicles[EGO].model.length);
+            assert!(
+                gap_min > lengths + 0.5,
+                "{domain:?} seed {seed}: bumper gap {}",
+                gap_min - lengths
+            );
+        }
+    }
+}
+
+#[test]
+fn turning_lead_leaves_the_ego_lane() {
+    for seed in 0..3 {
+        for domain in [Domain::City, Domain::Highway] {
+            let sc = build(ScenarioKind::Turning, domain, seed);
+            let t = sc.traffic();
+            let lane = sc.lane_width();
+            let d0 = t.ego_lane_d;
+            assert!(
+                (t.states[0][LEAD].d - d0).abs() < 0.2,
+                "lead starts in the ego lane"
+            );
+            let left = t
+                .states
+                .iter()
+                .position(|st| (st[LEAD].d - d0).abs() > 0.75 * lane)
+                .expect("the lead leaves the ego lane");
+            assert!(left > 10);
+            assert!(t.states[left][LEAD].s > t.states[left][EGO].s);
+            for i in 0..t.vehicles.len() {
+                assert!(max_decel(t, i) <= NORMAL_DECEL_LIMIT + 1e-3);
+            }
+            assert!(first_collision(t).is_none());
+        }
+    }
+}
+
+#[test]
+fn cut_in_vehicle_enters_the_ego_lane_ahead_of_the_ego() {
+    for seed in 0..3 {
+        for domain in [Domain::City, Domain::Highway] {
+            let sc = build(ScenarioKind::CutIn, domain, seed);
+            let t = sc.traffic();
+            let c = t.cut_in.expect("cut-in vehicle");
+            assert_eq!(t.vehicles[c].role, Role::CutIn);
+            let lane = sc.lane_width();
+            let d0 = t.ego_lane_d;
+            assert!(
+                (t.states[0][c].d - d0).abs() > 0.8 * lane,
+                "starts in another lane"
+            );
+            let inside = t
+                .states
+                .iter()
+                .position(|st| (st[c].d - d0).abs() < 0.3)
+                .expect("enters the ego lane");
+            assert!(t.states[inside][c].s > t.states[inside][EGO].s);
+            for i in 0..t.vehicles.len() {
+                assert!(max_decel(t, i) <= NORMAL_DECEL_LIMIT + 1e-3);
+            }
+            assert!(first_collision(t).is_none());
+        }
+    }
+}
+
+#[test]
+fn the_maneuvering_vehicle_is_visible_while_it_maneuvers() {
+    for kind in [ScenarioKind::Turning, ScenarioKind::CutIn] {
+        let mut s = ScenarioSpec::new(kind, Domain::Highway, Weather::Sun, 5);
+        s.width = 96;
+        s.height = 64;
+        let sc = Scenario::build(&s).expect("build");
+        let t = sc.traffic();
+        let who = if kind == ScenarioKind::CutIn {
+            t.cut_in.expect("cut-in")
+        } else {
+            LEAD
+        };
+        let d0 = t.ego_lane_d;
+        let mid = t
+            .states
+            .iter()
+            .position(|st| {
+                let off = (st[who].d - d0).abs();
+                off > 0.3 * sc.lane_width() && off < 0.7 * sc.lane_width()
+            })
+            .expect("a frame in the middle of the lane change");
+        let rec = sc.render_frame(mid).expect("render");
+        let id = t.vehicles[who].track_id as u64;
+        assert!(
+            rec.boxes.iter().any(|b| b.track_id == id),
+            "{kind:?}: no box for the vehicle at frame {mid}"
+        );
+    }
+}

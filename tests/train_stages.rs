@@ -1,0 +1,202 @@
+//! The three training stages on a tiny model and synthetic cubes: losses fall, the final
+//! checkpoint reproduces the model's outputs, and an interrupted run resumes to exactly the
+//! result of an uninterrupted one.
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::Path;
+
+use vadscope::model::{Detector, ModelConfig, NoiseRng, read_checkpoint_meta};
+use vadscope::train::{
+    CubeSet, LrSchedule, StageConfig, TrainConfig, TrainEvent, TrainReport, train,
+};
+
+const P: usize = 16;
+
+fn tiny_config() -> ModelConfig {
+    ModelConfig {
+        preset: "test-tiny".into(),
+        patch_size: P,
+        feature_root: 4,
+        num_slots: 8,
+        shrink_thres: 1.0 / 8.0,
+        nf_start: 8,
+        nf_max: 16,
+        ..ModelConfig::paper()
+    }
+}
+
+/// Cubes of a sinusoidal texture moving by a per-cube constant velocity, with the matching
+/// constant flow plus a little noise; 4 scenarios of 6 cubes.
+fn synthetic_cubes() -> CubeSet {
+    let mut set = CubeSet::new(P, 4);
+    let mut rng = NoiseRng::new(42);
+    for cube in 0..24 {
+        let (vx, vy) = (rng.uniform() * 2.0 - 1.0, rng.uniform() * 2.0 - 1.0);
+        let phase = rng.uniform() * 6.0;
+        let mut frames = Vec::with_capacity(15 * P * P);
+        for t in 0..5 {
+            for c in 0..3 {
+                for y in 0..P {
+                    for x in 0..P {
+                        let (fx, fy) = (x as f64 - vx * t as f64, y as f64 - vy * t as f64);
+                        let v =
+                            0.5 + 0.4 * ((fx * 0.7 + phase + c as f64).sin() * (fy * 0.5).cos());
+                        frames.push((v * 255.0).round() as u8);
+                    }
+                }
+            }
+        }
+        let mut flows = Vec::with_capacity(8 * P * P);
+        for _ in 0..4 {
+            for comp in [vx, vy] {
+                let noise = rng.normal_vec(P * P, 0.0, 0.05);
+                flows.extend(noise.into_iter().map(|n| comp as f32 + n));
+            }
+        }
+        set.push(&frames, &flows, cube / 6).expect("cube");
+    }
+    set
+}
+
+fn tiny_training(epochs: usize) -> TrainConfig {
+    let stage = |lr: f64| StageConfig {
+        epochs,
+        batch_size: 6,
+        lr,
+        schedule: LrSchedule::Step {
+            every: 50,
+            gamma: 0.8,
+        },
+        max_steps_per_epoch: None,
+    };
+    TrainConfig {
+        stage1: stage(3e-3),
+        stage2: stage(2e-3),
+        stage3: stage(1e-3),
+        seed: 7,
+        val_fraction: 0.25,
+        eval_batch: 8,
+        ..TrainConfig::default()
+    }
+}
+
+fn run(dir: &Path, epochs: usize, events: &mut Vec<TrainEvent>) -> TrainReport {
+    train(
+        &tiny_config(),
+        &tiny_training(epochs),
+        &synthetic_cubes(),
+        dir,
+        &mut |e| events.push(e.clone()),
+    )
+    .expect("training")
+}
+
+#[test]
+fn three_stages_reduce_their_losses_and_the_checkpoint_reproduces_the_model() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut events = Vec::new();
+    let report = run(dir.path(), 3, &mut events);
+    assert_eq!(report.split, (18, 6), "one of four scenarios held out");
+
+    for stage in 1..=3 {
+        let losses: Vec<f64> = events
+            .iter()
+            .filter_map(|e| match e {
+                TrainEvent::EpochDone {
+                    stage: s,
+                    train_loss,
+                    ..
+                } if *s == stage => Some(*train_loss),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(losses.len(), 3, "stage {stage} epochs");
+        assert!(
+            losses[2] < losses[0],
+            "stage {stage} training loss did not fall: {losses:?}"
+        );
+    }
+
+    // The checkpoint carries config and statistics, and reloading it reproduces the
+    // statistics exactly (same outputs on the same training cubes).
+    let meta = read_checkpoint_meta(&report.checkpoint).expect("meta");
+    assert_eq!(meta.config, tiny_config());
+    assert_eq!(meta.stats, Some(report.stats));
+    // Same batch size as the statistics pass, so the arithmetic is the same.
+    let detector = Detector::from_checkpoint(&report.checkpoint)
+        .expect("load")
+        .with_max_batch(8);
+    let data = synthetic_cubes();
+    let (train_idx, _) = data.split(0.25, 7);
+    let (frames, flows) = data.gather(&train_idx);
+    let cubes = detector.infer(&frames, &flows).expect("infer");
+    let n = cubes.len() as f64;
+    let mean_r = cubes.iter().map(|c| c.s_r as f64).sum::<f64>() / n;
+    let mean_p = cubes.iter().map(|c| c.s_p as f64).sum::<f64>() / n;
+    assert_eq!(report.stats.cubes, 18);
+    assert!((mean_r - report.stats.flow_score.mean).abs() <= 1e-9 * mean_r.abs().max(1.0));
+    assert!((mean_p - report.stats.frame_score.mean).abs() <= 1e-9 * mean_p.abs().max(1.0));
+}
+
+#[test]
+fn interrupted_training_resumes_to_the_same_model() {
+    let whole = tempfile::tempdir().expect("temp dir");
+    let whole_report = run(whole.path(), 2, &mut Vec::new());
+
+    let resumed = tempfile::tempdir().expect("temp dir");
+    // Interrupt right after stage 2's first epoch was checkpointed.
+    let interrupted = catch_unwind(AssertUnwindSafe(|| {
+        train(
+            &tiny_config(),
+            &tiny_training(2),
+            &synthetic_cubes(),
+            resumed.path(),
+            &mut |e| {
+                if matches!(
+                    e,
+                    TrainEvent::EpochDone {
+                        stage: 2,
+                        epoch: 0,
+                        ..
+                    }
+                ) {
+                    panic!("simulated crash");
+                }
+            },
+        )
+    }));
+    assert!(interrupted.is_err());
+    let mut events = Vec::new();
+    let resumed_report = run(resumed.path(), 2, &mut events);
+    assert!(events.contains(&TrainEvent::StageStarted {
+        stage: 2,
+        first_epoch: 1,
+        epochs: 2,
+        steps_per_epoch: 3
+    }));
+    assert_eq!(
+        resumed_report.stats, whole_report.stats,
+        "resumed run differs"
+    );
+    // Summaries went through JSON (last-bit rounding of f64), so compare them loosely.
+    for (a, b) in resumed_report.stages.iter().zip(&whole_report.stages) {
+        let (a, b) = (
+            a.as_ref().expect("stage ran"),
+            b.as_ref().expect("stage ran"),
+        );
+        assert_eq!((a.epochs, a.best_epoch), (b.epochs, b.best_epoch));
+        assert!((a.best_loss - b.best_loss).abs() <= 1e-12 * b.best_loss.abs());
+        assert!((a.last_train_loss - b.last_train_loss).abs() <= 1e-12 * b.last_train_loss.abs());
+    }
+
+    // A different configuration in the same folder is refused.
+    let err = train(
+        &tiny_config(),
+        &tiny_training(3),
+        &synthetic_cubes(),
+        resumed.path(),
+        &mut |_| {},
+    )
+    .expect_err("mismatched run");
+    assert!(err.to_string().contains("another model config"), "{err}");
+}
