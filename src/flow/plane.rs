@@ -115,8 +115,8 @@ impl Plane {
                 let s = &row[2 * x - 1..2 * x + 3];
                 *o = 0.125 * (s[0] + 3.0 * s[1] + 3.0 * s[2] + s[3]);
             }
-            for x in (last_interior + 1).max(1)..cw {
-                out[x] = edge(x);
+            for (x, o) in out.iter_mut().enumerate().skip((last_interior + 1).max(1)) {
+                *o = edge(x);
             }
         }
         let mut data = vec![0.0f32; cw * ch];

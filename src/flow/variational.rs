@@ -41,9 +41,9 @@ pub(crate) struct RefineSettings {
     pub delta: f32,
 }
 
-/// Fields of the data-term storage: image derivatives after warping and the normalisations
-/// `θ` already multiplied by the in-image mask (so pixels warped out of view have no data
-/// term).
+/// Fields of the data-term storage: image derivatives after warping. They are zero where
+/// the flow points out of the frame, which removes the data term there (every data
+/// coefficient is a product of derivatives).
 const IX: usize = 0;
 const IY: usize = 1;
 const IZ: usize = 2;
@@ -52,10 +52,7 @@ const IXY: usize = 4;
 const IYY: usize = 5;
 const IXZ: usize = 6;
 const IYZ: usize = 7;
-const THETA_0: usize = 8;
-const THETA_X: usize = 9;
-const THETA_Y: usize = 10;
-const TERM_FIELDS: usize = 11;
+const TERM_FIELDS: usize = 8;
 
 /// Fields of the flow storage: the flow being refined and the increment.
 const U: usize = 0;
@@ -299,16 +296,10 @@ fn data_terms(i0: &Plane, i1: &PaddedPlane, flow: &DenseFlow) -> Checker {
         });
     let (i0x, i0y) = gradients_5pt(i0);
     let (i1x, i1y) = gradients_5pt(&warped);
-    let average = |a: &Plane, b: &Plane| {
-        let data = a.data.iter().zip(&b.data).map(|(p, q)| 0.5 * (p + q));
-        Plane::from_vec(w, h, data.collect())
-    };
     let first = FirstOrder {
         i0,
         warped: &warped,
         mask: &mask,
-        ix: &average(&i0x, &i1x),
-        iy: &average(&i0y, &i1y),
         gradients: [&i0x, &i0y, &i1x, &i1y],
     };
     let mut terms = Checker::new(w, h, TERM_FIELDS);
@@ -320,14 +311,18 @@ fn data_terms(i0: &Plane, i1: &PaddedPlane, flow: &DenseFlow) -> Checker {
         .skip(1)
         .take(h)
         .enumerate()
-        .for_each(|(y, (red_row, black_row))| {
-            #[cfg(target_arch = "x86_64")]
-            if wide {
-                // SAFETY: `wide_vectors_available` confirmed AVX2 on this CPU.
-                return unsafe { terms_row_avx2(&first, y, stride, [red_row, black_row]) };
-            }
-            terms_row(&first, y, stride, [red_row, black_row]);
-        });
+        .for_each_init(
+            || vec![0.0f32; TERM_FIELDS * w],
+            |scratch, (y, (red_row, black_row))| {
+                let rows = [red_row, black_row];
+                #[cfg(target_arch = "x86_64")]
+                if wide {
+                    // SAFETY: `wide_vectors_available` confirmed AVX2 on this CPU.
+                    return unsafe { terms_row_avx2(&first, y, stride, rows, scratch) };
+                }
+                terms_row(&first, y, stride, rows, scratch);
+            },
+        );
     terms
 }
 
@@ -364,69 +359,70 @@ struct FirstOrder<'a> {
     i0: &'a Plane,
     warped: &'a Plane,
     mask: &'a Plane,
-    /// Mean of both frames' x-derivatives.
-    ix: &'a Plane,
-    /// Mean of both frames' y-derivatives.
-    iy: &'a Plane,
     /// x- and y-derivatives of `i0`, then of `warped`.
     gradients: [&'a Plane; 4],
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn terms_row_avx2(first: &FirstOrder, y: usize, stride: usize, rows: [&mut [f32]; 2]) {
-    terms_row(first, y, stride, rows);
+unsafe fn terms_row_avx2(
+    first: &FirstOrder,
+    y: usize,
+    stride: usize,
+    rows: [&mut [f32]; 2],
+    scratch: &mut [f32],
+) {
+    terms_row(first, y, stride, rows, scratch);
 }
 
-/// Row `y` of every data-term field, written into both colours' row blocks.
+/// Row `y` of every data-term field, computed in full layout in `scratch` (`TERM_FIELDS`
+/// rows of the image width) and then split into both colours' row blocks.
 #[inline(always)]
-fn terms_row(first: &FirstOrder, y: usize, stride: usize, rows: [&mut [f32]; 2]) {
+fn terms_row(
+    first: &FirstOrder,
+    y: usize,
+    stride: usize,
+    rows: [&mut [f32]; 2],
+    scratch: &mut [f32],
+) {
     let (w, h) = (first.i0.width, first.i0.height);
-    let (ix, iy) = (first.ix.row(y), first.iy.row(y));
-    let [i0x, i0y, i1x, i1y] = first.gradients.map(|g| g.row(y));
-    let (iy_up, iy_down) = (
-        first.iy.row(y.saturating_sub(1)),
-        first.iy.row((y + 1).min(h - 1)),
-    );
-    let (ix_up, ix_down) = (
-        first.ix.row(y.saturating_sub(1)),
-        first.ix.row((y + 1).min(h - 1)),
-    );
+    let (up, down) = (y.saturating_sub(1), (y + 1).min(h - 1));
+    let [i0x, i0y, i1x, i1y] = first.gradients;
     let (mask, warped, i0) = (first.mask.row(y), first.warped.row(y), first.i0.row(y));
-    let mut fields = vec![vec![0.0f32; w]; TERM_FIELDS];
-    {
-        let [fix, fiy, fiz, fixx, fixy, fiyy, fixz, fiyz, ft0, ftx, fty] =
-            <&mut [Vec<f32>; TERM_FIELDS]>::try_from(fields.as_mut_slice())
-                .expect("one vector per field");
-        // Central differences of the mean derivatives, replicating the border.
-        let side = |row: &[f32], x: usize| (row[x.saturating_sub(1)], row[(x + 1).min(w - 1)]);
-        for x in 0..w {
-            let (l, r) = side(ix, x);
-            let (lv, rv) = side(iy, x);
-            fixx[x] = 0.5 * (r - l);
-            // I_xy averages d(I_x)/dy and d(I_y)/dx.
-            fixy[x] = 0.5 * (0.5 * (ix_down[x] - ix_up[x]) + 0.5 * (rv - lv));
-            fiyy[x] = 0.5 * (iy_down[x] - iy_up[x]);
-        }
-        for x in 0..w {
-            let (gx, gy) = (ix[x], iy[x]);
-            let (gxx, gxy, gyy) = (fixx[x], fixy[x], fiyy[x]);
-            fix[x] = gx;
-            fiy[x] = gy;
-            fiz[x] = warped[x] - i0[x];
-            fixz[x] = i1x[x] - i0x[x];
-            fiyz[x] = i1y[x] - i0y[x];
-            ft0[x] = mask[x] / (gx * gx + gy * gy + ZETA_SQ);
-            ftx[x] = mask[x] / (gxx * gxx + gxy * gxy + ZETA_SQ);
-            fty[x] = mask[x] / (gxy * gxy + gyy * gyy + ZETA_SQ);
-        }
+    let mut fields = scratch.chunks_exact_mut(w);
+    let mut next = || fields.next().expect("scratch holds every field");
+    let (fix, fiy, fiz, fixx) = (next(), next(), next(), next());
+    let (fixy, fiyy, fixz, fiyz) = (next(), next(), next(), next());
+    // Derivatives of both frames are averaged (I_x, I_y); the gradient-constancy terms use
+    // their central differences, replicating the border.
+    let (a, b, c, d) = (i0x.row(y), i1x.row(y), i0y.row(y), i1y.row(y));
+    for x in 0..w {
+        fix[x] = 0.5 * (a[x] + b[x]);
+        fiy[x] = 0.5 * (c[x] + d[x]);
+        fiz[x] = warped[x] - i0[x];
+        fixz[x] = b[x] - a[x];
+        fiyz[x] = d[x] - c[x];
+    }
+    let (ix_up, ix_down) = ((i0x.row(up), i1x.row(up)), (i0x.row(down), i1x.row(down)));
+    let (iy_up, iy_down) = ((i0y.row(up), i1y.row(up)), (i0y.row(down), i1y.row(down)));
+    for x in 0..w {
+        let (l, r) = (x.saturating_sub(1), (x + 1).min(w - 1));
+        let d_ix_dy = 0.25 * ((ix_down.0[x] + ix_down.1[x]) - (ix_up.0[x] + ix_up.1[x]));
+        let d_iy_dy = 0.25 * ((iy_down.0[x] + iy_down.1[x]) - (iy_up.0[x] + iy_up.1[x]));
+        fixx[x] = 0.5 * (fix[r] - fix[l]);
+        // I_xy averages d(I_x)/dy and d(I_y)/dx.
+        fixy[x] = 0.5 * (d_ix_dy + 0.5 * (fiy[r] - fiy[l]));
+        fiyy[x] = d_iy_dy;
     }
     for (c, row) in rows.into_iter().enumerate() {
         let first_x = shift(c, y);
-        for (f, values) in fields.iter().enumerate() {
+        for (f, values) in scratch.chunks_exact(w).enumerate() {
             let dst = &mut row[f * stride + 1..(f + 1) * stride];
-            for (d, v) in dst.iter_mut().zip(values[first_x..].iter().step_by(2)) {
-                *d = *v;
+            for (dst, (v, m)) in dst
+                .iter_mut()
+                .zip(values[first_x..].iter().zip(&mask[first_x..]).step_by(2))
+            {
+                *dst = v * m;
             }
         }
     }
@@ -586,7 +582,6 @@ fn coefficients_row(job: &CoefRow, block: &mut [f32]) {
     let term = |f: usize| span(t, stride, f, 1, n);
     let (ix, iy, iz) = (term(IX), term(IY), term(IZ));
     let (ixx, ixy, iyy, ixz, iyz) = (term(IXX), term(IXY), term(IYY), term(IXZ), term(IYZ));
-    let (th0, thx, thy) = (term(THETA_0), term(THETA_X), term(THETA_Y));
     let (du, dv) = (span(own, stride, DU, 1, n), span(own, stride, DV, 1, n));
     let (same, above, below) = (state.row(o, yi), state.row(o, yi - 1), state.row(o, yi + 1));
     let (u, v) = (span(own, stride, U, 1, n), span(own, stride, V, 1, n));
@@ -617,9 +612,6 @@ fn coefficients_row(job: &CoefRow, block: &mut [f32]) {
         let iyy8 = lanes(iyy, start);
         let ixz8 = lanes(ixz, start);
         let iyz8 = lanes(iyz, start);
-        let th08 = lanes(th0, start);
-        let thx8 = lanes(thx, start);
-        let thy8 = lanes(thy, start);
         let du8 = lanes(du, start);
         let dv8 = lanes(dv, start);
         let u8 = lanes(u, start);
@@ -640,8 +632,8 @@ fn coefficients_row(job: &CoefRow, block: &mut [f32]) {
         for l in 0..LANES {
             let r = pixel_system(
                 [
-                    ix8[l], iy8[l], iz8[l], ixx8[l], ixy8[l], iyy8[l], ixz8[l], iyz8[l], th08[l],
-                    thx8[l], thy8[l], du8[l], dv8[l],
+                    ix8[l], iy8[l], iz8[l], ixx8[l], ixy8[l], iyy8[l], ixz8[l], iyz8[l], du8[l],
+                    dv8[l],
                 ],
                 [
                     u8[l], v8[l], u_w8[l], v_w8[l], u_e8[l], v_e8[l], u_n8[l], v_n8[l], u_s8[l],
@@ -663,8 +655,7 @@ fn coefficients_row(job: &CoefRow, block: &mut [f32]) {
     for i in full..n {
         let r = pixel_system(
             [
-                ix[i], iy[i], iz[i], ixx[i], ixy[i], iyy[i], ixz[i], iyz[i], th0[i], thx[i],
-                thy[i], du[i], dv[i],
+                ix[i], iy[i], iz[i], ixx[i], ixy[i], iyy[i], ixz[i], iyz[i], du[i], dv[i],
             ],
             [
                 u[i], v[i], u_w[i], v_w[i], u_e[i], v_e[i], u_n[i], v_n[i], u_s[i], v_s[i], w_e[i],
@@ -694,12 +685,15 @@ fn lanes(a: &[f32], start: usize) -> [f32; LANES] {
 
 /// The SOR system of one pixel, in the order of the coefficient fields.
 ///
-/// `d` = [I_x, I_y, I_z, I_xx, I_xy, I_yy, I_xz, I_yz, θ₀, θ_x, θ_y, du, dv];
+/// `d` = [I_x, I_y, I_z, I_xx, I_xy, I_yy, I_xz, I_yz, du, dv];
 /// `m` = [U, V, U_west, V_west, U_east, V_east, U_north, V_north, U_south, V_south,
 /// w_east, w_west, w_south, w_north].
 #[inline(always)]
-fn pixel_system(d: [f32; 13], m: [f32; 14], delta: f32, gamma: f32) -> [f32; COEF_FIELDS] {
-    let [ix, iy, iz, ixx, ixy, iyy, ixz, iyz, th0, thx, thy, du, dv] = d;
+fn pixel_system(d: [f32; 10], m: [f32; 14], delta: f32, gamma: f32) -> [f32; COEF_FIELDS] {
+    let [ix, iy, iz, ixx, ixy, iyy, ixz, iyz, du, dv] = d;
+    let th0 = 1.0 / (ix * ix + iy * iy + ZETA_SQ);
+    let thx = 1.0 / (ixx * ixx + ixy * ixy + ZETA_SQ);
+    let thy = 1.0 / (ixy * ixy + iyy * iyy + ZETA_SQ);
     let [
         u,
         v,
