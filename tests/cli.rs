@@ -123,7 +123,11 @@ fn generate_rejects_bad_sizes() {
         "96by64",
     ]);
     assert!(!out.status.success());
-    assert!(text(&out.stderr).contains("WIDTHxHEIGHT"));
+    assert!(
+        text(&out.stderr).contains("WIDTHxHEIGHT"),
+        "{}",
+        text(&out.stderr)
+    );
 }
 
 #[test]

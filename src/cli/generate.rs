@@ -10,8 +10,8 @@ use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use vadscope::sequence::Modality;
 use vadscope::synth::{
-    DatasetRequest, DomainChoice, KindChoice, Preset, ScenarioKind, WeatherChoice,
-    generate_scenario_without, plan_dataset,
+    DatasetRequest, DomainChoice, KindChoice, Preset, WeatherChoice, generate_scenario_without,
+    parse_size, plan_dataset,
 };
 
 /// Options of `vadscope generate`.
@@ -22,25 +22,25 @@ pub struct GenerateArgs {
     out: PathBuf,
     /// A data-set preset shaped like the paper's data: `train` (normal driving, city and
     /// highway, sun and rain, 24 scenarios) or `test` (13 sudden-braking scenarios).
-    #[arg(long, value_enum)]
-    preset: Option<PresetArg>,
+    #[arg(long, value_name = "train|test")]
+    preset: Option<Preset>,
     /// Number of scenarios (default: 24 for train, 13 for test, else 1).
     #[arg(long)]
     count: Option<usize>,
-    /// What happens in each scenario.
-    #[arg(long, value_enum)]
-    kind: Option<KindArg>,
+    /// What happens in each scenario; `mixed` draws a kind per scenario from the seed.
+    #[arg(long, value_name = "normal|braking|mixed|turning|cut-in")]
+    kind: Option<KindChoice>,
     /// Road environment; `any` draws one per scenario from the seed.
-    #[arg(long, value_enum)]
-    domain: Option<DomainArg>,
+    #[arg(long, value_name = "city|highway|any")]
+    domain: Option<DomainChoice>,
     /// Weather; `any` draws one per scenario from the seed.
-    #[arg(long, value_enum)]
-    weather: Option<WeatherArg>,
+    #[arg(long, value_name = "sun|rain|fog|night|any")]
+    weather: Option<WeatherChoice>,
     /// Frames per scenario at 10 fps (default 200, as AnoVox).
     #[arg(long)]
     frames: Option<u32>,
     /// Image size as WIDTHxHEIGHT (default 768x512, AnoVox's camera).
-    #[arg(long, value_parser = parse_size)]
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
     size: Option<(u32, u32)>,
     /// Seed of the data set: the same seed and options give identical bytes.
     #[arg(long, default_value_t = 0)]
@@ -77,75 +77,13 @@ impl OmitArg {
     }
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum PresetArg {
-    Train,
-    Test,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum KindArg {
-    Normal,
-    Braking,
-    Mixed,
-    Turning,
-    CutIn,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum DomainArg {
-    City,
-    Highway,
-    Any,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum WeatherArg {
-    Sun,
-    Rain,
-    Fog,
-    Night,
-    Any,
-}
-
-fn parse_size(text: &str) -> Result<(u32, u32), String> {
-    let (w, h) = text
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got `{text}`"))?;
-    let parse = |s: &str| {
-        s.trim()
-            .parse::<u32>()
-            .map_err(|_| format!("`{s}` is not a whole number of pixels"))
-    };
-    Ok((parse(w)?, parse(h)?))
-}
-
 fn request_of(args: &GenerateArgs) -> DatasetRequest {
     DatasetRequest {
-        preset: args.preset.map(|p| match p {
-            PresetArg::Train => Preset::Train,
-            PresetArg::Test => Preset::Test,
-        }),
+        preset: args.preset,
         count: args.count,
-        kind: args.kind.map(|k| match k {
-            KindArg::Normal => KindChoice::Only(ScenarioKind::Normal),
-            KindArg::Braking => KindChoice::Only(ScenarioKind::Braking),
-            KindArg::Turning => KindChoice::Only(ScenarioKind::Turning),
-            KindArg::CutIn => KindChoice::Only(ScenarioKind::CutIn),
-            KindArg::Mixed => KindChoice::Mixed,
-        }),
-        domain: args.domain.map(|d| match d {
-            DomainArg::City => DomainChoice::City,
-            DomainArg::Highway => DomainChoice::Highway,
-            DomainArg::Any => DomainChoice::Any,
-        }),
-        weather: args.weather.map(|w| match w {
-            WeatherArg::Sun => WeatherChoice::Sun,
-            WeatherArg::Rain => WeatherChoice::Rain,
-            WeatherArg::Fog => WeatherChoice::Fog,
-            WeatherArg::Night => WeatherChoice::Night,
-            WeatherArg::Any => WeatherChoice::Any,
-        }),
+        kind: args.kind,
+        domain: args.domain,
+        weather: args.weather,
         frames: args.frames,
         size: args.size,
         seed: args.seed,
