@@ -117,21 +117,29 @@ fn regenerating_the_samples_gives_the_same_content() {
         for k in frames {
             let record = generated.render_frame(k).unwrap();
             let at = format!("{} frame {k}", dir.display());
-            assert_eq!(*stored.rgb(k).unwrap(), record.rgb, "{at}: RGB");
+            // Images are compared with `==` and a short message: a failing `assert_eq!` would
+            // print every pixel.
+            let regenerate = "regenerate with `bash sample_sequences/regenerate.sh`";
+            assert!(
+                *stored.rgb(k).unwrap() == record.rgb,
+                "{at}: RGB differs; {regenerate}"
+            );
             let semantic = stored
                 .semantic(k)
                 .unwrap()
                 .expect("samples store semantic ids");
-            assert_eq!(
-                Some(semantic.ids.clone()),
-                record.semantic,
-                "{at}: semantic"
+            assert!(
+                Some(&semantic.ids) == record.semantic.as_ref(),
+                "{at}: semantic ids differ; {regenerate}"
             );
             let instance = stored
                 .instance(k)
                 .unwrap()
                 .expect("samples store instance ids");
-            assert_eq!(Some(instance.to_rgb()), record.instance, "{at}: instance");
+            assert!(
+                Some(instance.to_rgb()) == record.instance,
+                "{at}: instance ids differ; {regenerate}"
+            );
             assert_eq!(stored.boxes(k).unwrap(), record.boxes, "{at}: boxes");
             assert_eq!(Some(labels.flags[k]), record.anomalous, "{at}: label");
             assert_eq!(stored.action(k).unwrap(), record.action, "{at}: ACTION");
