@@ -159,10 +159,16 @@ fn flow_error_breakdown() {
     } else {
         Domain::Highway
     };
+    let weather = match env_or("SYNTH_LOOK_WEATHERS", "sun").as_str() {
+        "rain" => Weather::Rain,
+        "fog" => Weather::Fog,
+        "night" => Weather::Night,
+        _ => Weather::Sun,
+    };
     let mut spec = ScenarioSpec::new(
         ScenarioKind::Normal,
         domain,
-        Weather::Sun,
+        weather,
         env_or("SYNTH_LOOK_SEED", "3").parse().expect("seed"),
     );
     spec.width = w;
