@@ -34,17 +34,19 @@ pub fn value2(x: f32, y: f32, salt: u32) -> f32 {
     let (fx, fy) = (x - xf, y - yf);
     let ux = fx * fx * (3.0 - 2.0 * fx);
     let uy = fy * fy * (3.0 - 2.0 * fy);
-    // The salt selects a pseudo-random window of the lattice table.
+    // The salt selects a pseudo-random window of the lattice table; indices wrap at 256 so
+    // that they always fit the table (a `u16` index needs no bounds check).
     let h = salt.wrapping_mul(0x9e37_79b9);
-    let x0 = (ix as u32).wrapping_add(h) as usize % TABLE;
-    let y0 = (iy as u32).wrapping_add(h >> 16) as usize % TABLE;
-    let x1 = (x0 + 1) % TABLE;
-    let y1 = (y0 + 1) % TABLE;
+    let x0 = (ix as u32).wrapping_add(h) & 255;
+    let y0 = (iy as u32).wrapping_add(h >> 16) & 255;
+    let x1 = (x0 + 1) & 255;
+    let y1 = (y0 + 1) & 255;
     let t = &TABLE_VALUES;
-    let a = t[x0 + y0 * TABLE];
-    let b = t[x1 + y0 * TABLE];
-    let c = t[x0 + y1 * TABLE];
-    let d = t[x1 + y1 * TABLE];
+    let at = |x: u32, y: u32| t[((y << 8) | x) as u16 as usize];
+    let a = at(x0, y0);
+    let b = at(x1, y0);
+    let c = at(x0, y1);
+    let d = at(x1, y1);
     let top = a + (b - a) * ux;
     let bottom = c + (d - c) * ux;
     top + (bottom - top) * uy
