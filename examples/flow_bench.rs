@@ -1,15 +1,22 @@
 //! Benchmark driver for vadscope's DIS optical flow, used by `benches/flow_opencv/run.sh` to
-//! compare it with OpenCV's DIS on the same frames.
+//! compare it with OpenCV's DIS on the same frames. It only uses the vadscope library.
 //!
-//! Reads a folder written by `benches/flow_opencv/make_pairs.py` (`manifest.json`, grey PNG
-//! frames, KITTI 16-bit ground-truth flow, vehicle boxes) and prints one JSON object per
-//! line:
+//! A *pair folder* holds `manifest.json`, grey PNG frames, KITTI 16-bit ground-truth flow
+//! and vehicle boxes. It is written by `benches/flow_opencv/make_pairs.py` (affine synthetic
+//! pairs) or by `export-pairs` below (pairs from generated driving scenarios). Commands:
 //!
+//! * `generate`: generates the driving scenarios of the benchmark (city and highway, sun
+//!   and rain) with vadscope's generator, exact flow included;
+//! * `export-pairs`: turns scenarios into a pair folder;
 //! * `accuracy`: EPE over all pixels, over valid pixels, and on 32×32 vehicle patches (crop
 //!   and bilinear resize as HF²-VAD does) for vadscope's flow or for flows computed
 //!   elsewhere and stored as Middlebury `.flo` files (`--external DIR`, files
 //!   `DIR/<preset>/<pair>.flo`), so both tools are scored by the same code;
-//! * `time`: milliseconds per frame pair on a given number of threads.
+//! * `time`: milliseconds per frame pair on a given number of threads;
+//! * `evaluate`: fills a scenario's flow cache and scores it against the stored flow, with
+//!   the library's `flow::evaluate` (what `vadscope flow --evaluate` reports).
+//!
+//! `accuracy` and `time` print one JSON object per line.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -17,11 +24,18 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use image::GrayImage;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use serde_json::json;
+use vadscope::flow::cache::FlowCacheOptions;
+use vadscope::flow::evaluate::evaluate_flow;
 use vadscope::flow::{
-    DisFlow, DisParams, DisPreset, FlowField, PixelBox, box_endpoint_error, endpoint_error,
+    DisFlow, DisParams, DisPreset, FlowField, FlowFrame, PixelBox, box_endpoint_error,
+    endpoint_error,
 };
+use vadscope::sequence::flow_file::{read_flo, write_flo, write_kitti_png};
+use vadscope::sequence::palette::is_vehicle_id;
+use vadscope::sequence::{Domain, Modality, Scenario, Weather};
+use vadscope::synth::{ScenarioKind, ScenarioSpec, generate_scenario_without};
 
 #[derive(Parser)]
 #[command(about = "vadscope DIS flow benchmark driver (see benches/flow_opencv/run.sh)")]
@@ -32,6 +46,36 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Generate the benchmark's driving scenarios: {city, highway} × {sun, rain}.
+    Generate {
+        /// Folder to create the scenarios in.
+        #[arg(long)]
+        out: PathBuf,
+        /// Frame size, WIDTHxHEIGHT.
+        #[arg(long, default_value = "768x512", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Frames per scenario.
+        #[arg(long, default_value_t = 16)]
+        frames: u32,
+        /// Seed of the first scenario (the others use the following seeds).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Write a pair folder from scenarios with stored (ground-truth) flow.
+    ExportPairs {
+        /// Scenario folders.
+        #[arg(long, num_args = 1.., required = true)]
+        scenarios: Vec<PathBuf>,
+        /// Pair folder to write.
+        #[arg(long)]
+        out: PathBuf,
+        /// Take the flow into every K-th frame.
+        #[arg(long, default_value_t = 4)]
+        every: usize,
+        /// Smallest vehicle box side kept, in pixels.
+        #[arg(long, default_value_t = 8.0)]
+        min_box: f32,
+    },
     /// Print EPE figures per pair and preset.
     Accuracy {
         /// Folder with manifest.json.
@@ -75,15 +119,43 @@ enum Command {
         /// Timed repetitions per pair.
         #[arg(long, default_value_t = 10)]
         reps: usize,
+        /// Time only the first N pairs.
+        #[arg(long)]
+        max_pairs: Option<usize>,
+    },
+    /// Fill a scenario's flow cache and score it against the stored flow.
+    Evaluate {
+        /// Scenario folder.
+        scenario: PathBuf,
+        /// DIS preset.
+        #[arg(long, default_value = "medium")]
+        preset: DisPreset,
+        /// Worker threads (0: one per core).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
     },
 }
 
-#[derive(Deserialize)]
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    let (w, h) = text
+        .split_once('x')
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got {text:?}"))?;
+    let parse = |s: &str| s.parse::<u32>().map_err(|e| format!("{s:?}: {e}"));
+    Ok((parse(w)?, parse(h)?))
+}
+
+#[derive(Serialize, Deserialize)]
 struct Manifest {
+    /// Who wrote the folder.
+    source: String,
+    /// Whether the ground truth holds the true motion at every pixel (the affine pairs) or
+    /// only where it is marked valid (scenario flow: unknown pixels read as zero).
+    #[serde(default)]
+    truth_everywhere: bool,
     pairs: Vec<PairEntry>,
 }
 
-#[derive(Deserialize)]
+#[derive(Serialize, Deserialize)]
 struct PairEntry {
     name: String,
     frame0: String,
@@ -100,13 +172,18 @@ struct Pair {
     boxes: Vec<PixelBox>,
 }
 
-fn load_pairs(dir: &Path) -> Result<Vec<Pair>> {
+struct PairSet {
+    truth_everywhere: bool,
+    pairs: Vec<Pair>,
+}
+
+fn load_pairs(dir: &Path) -> Result<PairSet> {
     let manifest_path = dir.join("manifest.json");
     let text = std::fs::read_to_string(&manifest_path)
         .with_context(|| format!("{}", manifest_path.display()))?;
     let manifest: Manifest =
         serde_json::from_str(&text).with_context(|| format!("{}", manifest_path.display()))?;
-    manifest
+    let pairs = manifest
         .pairs
         .into_iter()
         .map(|p| {
@@ -119,7 +196,7 @@ fn load_pairs(dir: &Path) -> Result<Vec<Pair>> {
             Ok(Pair {
                 prev: grey(&p.frame0)?,
                 next: grey(&p.frame1)?,
-                truth: read_kitti_flow(&dir.join(&p.flow))?,
+                truth: read_kitti_values(&dir.join(&p.flow))?,
                 boxes: p
                     .boxes
                     .iter()
@@ -133,11 +210,16 @@ fn load_pairs(dir: &Path) -> Result<Vec<Pair>> {
                 name: p.name,
             })
         })
-        .collect()
+        .collect::<Result<_>>()?;
+    Ok(PairSet {
+        truth_everywhere: manifest.truth_everywhere,
+        pairs,
+    })
 }
 
-/// KITTI flow PNG: 16-bit RGB, u = (R − 2¹⁵)/64, v = (G − 2¹⁵)/64, B = valid.
-fn read_kitti_flow(path: &Path) -> Result<FlowField> {
+/// A KITTI flow PNG with the stored values kept at every pixel, also where the valid flag
+/// is off (the affine pairs store their true motion there; `sequence`'s reader zeroes it).
+fn read_kitti_values(path: &Path) -> Result<FlowField> {
     let img = image::open(path)
         .with_context(|| format!("{}", path.display()))?
         .into_rgb16();
@@ -157,47 +239,83 @@ fn read_kitti_flow(path: &Path) -> Result<FlowField> {
     })
 }
 
-/// Middlebury `.flo`: magic 202021.25, width, height, then interleaved little-endian f32.
-fn read_flo(path: &Path) -> Result<FlowField> {
-    let bytes = std::fs::read(path).with_context(|| format!("{}", path.display()))?;
-    let word = |i: usize| -> Result<[u8; 4]> {
-        bytes
-            .get(4 * i..4 * i + 4)
-            .and_then(|s| s.try_into().ok())
-            .with_context(|| format!("{}: truncated", path.display()))
-    };
-    if f32::from_le_bytes(word(0)?) != 202021.25 {
-        bail!("{}: not a .flo file", path.display());
+fn generate(out: &Path, (width, height): (u32, u32), frames: u32, seed: u64) -> Result<()> {
+    let combos = [
+        (Domain::City, Weather::Sun),
+        (Domain::City, Weather::Rain),
+        (Domain::Highway, Weather::Sun),
+        (Domain::Highway, Weather::Rain),
+    ];
+    for (k, (domain, weather)) in combos.into_iter().enumerate() {
+        let mut spec = ScenarioSpec::new(ScenarioKind::Normal, domain, weather, seed + k as u64);
+        spec.frames = frames;
+        spec.width = width;
+        spec.height = height;
+        spec.name = spec.default_name(k);
+        let dir = generate_scenario_without(&spec, out, &[Modality::Depth], |_| {})?;
+        println!("{}", dir.display());
     }
-    let width = u32::from_le_bytes(word(1)?);
-    let height = u32::from_le_bytes(word(2)?);
-    let n = 2 * width as usize * height as usize;
-    if bytes.len() != 12 + 4 * n {
-        bail!("{}: size does not match {width}×{height}", path.display());
-    }
-    let uv = (0..n)
-        .map(|i| word(3 + i).map(f32::from_le_bytes))
-        .collect::<Result<Vec<_>>>()?;
-    Ok(FlowField {
-        width,
-        height,
-        uv,
-        valid: None,
-    })
+    Ok(())
 }
 
-fn write_flo(path: &Path, flow: &FlowField) -> Result<()> {
-    let mut bytes = Vec::with_capacity(12 + 4 * flow.uv.len());
-    bytes.extend_from_slice(&202021.25f32.to_le_bytes());
-    bytes.extend_from_slice(&flow.width.to_le_bytes());
-    bytes.extend_from_slice(&flow.height.to_le_bytes());
-    for v in &flow.uv {
-        bytes.extend_from_slice(&v.to_le_bytes());
+fn export_pairs(scenarios: &[PathBuf], out: &Path, every: usize, min_box: f32) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("{}", out.display()))?;
+    let mut entries = Vec::new();
+    for root in scenarios {
+        let scenario = Scenario::open(root)?;
+        for index in (every.max(1)..scenario.len()).step_by(every.max(1)) {
+            let Some(truth) = scenario.flow(index)? else {
+                continue;
+            };
+            let name = format!("{}_{index:04}", scenario.name());
+            let grey = |i: usize| -> Result<GrayImage> {
+                let rgb = scenario.rgb(i)?;
+                let (w, h) = rgb.frame_size();
+                let luma = rgb.luma();
+                Ok(GrayImage::from_fn(w, h, |x, y| {
+                    let v = luma[(y * w + x) as usize];
+                    image::Luma([v.round().clamp(0.0, 255.0) as u8])
+                }))
+            };
+            let files = [
+                format!("{name}_0.png"),
+                format!("{name}_1.png"),
+                format!("{name}_gt.png"),
+            ];
+            for (file, frame) in files.iter().zip([index - 1, index]) {
+                let path = out.join(file);
+                grey(frame)?
+                    .save(&path)
+                    .with_context(|| format!("{}", path.display()))?;
+            }
+            write_kitti_png(&out.join(&files[2]), &truth)?;
+            let boxes = scenario
+                .boxes(index)?
+                .into_iter()
+                .filter(|b| u8::try_from(b.class).is_ok_and(is_vehicle_id))
+                .filter(|b| b.width() >= min_box && b.height() >= min_box)
+                .map(|b| [b.x1, b.y1, b.x2, b.y2])
+                .collect();
+            let [frame0, frame1, flow] = files;
+            entries.push(PairEntry {
+                name,
+                frame0,
+                frame1,
+                flow,
+                boxes,
+            });
+        }
     }
-    if let Some(dir) = path.parent() {
-        std::fs::create_dir_all(dir).with_context(|| format!("{}", dir.display()))?;
-    }
-    std::fs::write(path, bytes).with_context(|| format!("{}", path.display()))
+    let manifest = Manifest {
+        source: "flow_bench export-pairs".into(),
+        truth_everywhere: false,
+        pairs: entries,
+    };
+    let path = out.join("manifest.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&manifest)?)
+        .with_context(|| format!("{}", path.display()))?;
+    println!("{} pairs in {}", manifest.pairs.len(), out.display());
+    Ok(())
 }
 
 /// The preset's parameters with the fields of `overrides` (a JSON object) replaced.
@@ -228,7 +346,7 @@ struct AccuracyArgs<'a> {
     write_to: Option<&'a Path>,
 }
 
-fn accuracy(pairs: &[Pair], args: AccuracyArgs) -> Result<()> {
+fn accuracy(set: &PairSet, args: AccuracyArgs) -> Result<()> {
     let AccuracyArgs {
         presets,
         overrides,
@@ -238,28 +356,40 @@ fn accuracy(pairs: &[Pair], args: AccuracyArgs) -> Result<()> {
     } = args;
     for &preset in presets {
         let dis = preset_flow(preset, overrides)?;
-        for pair in pairs {
+        for pair in &set.pairs {
             let flow = match external {
                 Some(dir) => read_flo(&dir.join(preset.name()).join(format!("{}.flo", pair.name)))?,
                 None => dis.estimate(&pair.prev, &pair.next, None)?,
             };
             if let Some(dir) = write_to {
-                write_flo(
-                    &dir.join(preset.name()).join(format!("{}.flo", pair.name)),
-                    &flow,
-                )?;
+                let folder = dir.join(preset.name());
+                std::fs::create_dir_all(&folder)
+                    .with_context(|| format!("{}", folder.display()))?;
+                write_flo(&folder.join(format!("{}.flo", pair.name)), &flow)?;
             }
             let epe = endpoint_error(&flow, &pair.truth)?;
+            // Where the truth holds true motion everywhere, patches count every resized
+            // pixel (as in the design study); otherwise only pixels with known motion.
+            let truth = if set.truth_everywhere {
+                FlowField {
+                    valid: None,
+                    ..pair.truth.clone()
+                }
+            } else {
+                pair.truth.clone()
+            };
             let patches = pair
                 .boxes
                 .iter()
-                .map(|&b| box_endpoint_error(&flow, &pair.truth, b, 32))
+                .map(|&b| box_endpoint_error(&flow, &truth, b, 32))
                 .collect::<Result<Vec<_>, _>>()?;
             println!(
                 "{}",
                 json!({
                     "kind": "accuracy", "tool": label, "preset": preset.name(),
-                    "pair": pair.name, "epe_all": epe.mean_all, "epe_valid": epe.mean_valid,
+                    "pair": pair.name,
+                    "epe_all": set.truth_everywhere.then_some(epe.mean_all),
+                    "epe_valid": epe.mean_valid,
                     "epe_patch32": patches,
                 })
             );
@@ -304,7 +434,7 @@ fn time(pairs: &[Pair], presets: &[DisPreset], threads: usize, reps: usize) -> R
                 "{}",
                 json!({
                     "kind": "time", "tool": "vadscope", "preset": preset.name(),
-                    "threads": threads, "reps": reps,
+                    "threads": threads, "reps": reps, "pairs": pairs.len(),
                     "ms_median": medians.iter().sum::<f64>() / n,
                     "ms_min": mins.iter().sum::<f64>() / n,
                 })
@@ -314,8 +444,41 @@ fn time(pairs: &[Pair], presets: &[DisPreset], threads: usize, reps: usize) -> R
     })
 }
 
+fn evaluate(root: &Path, preset: DisPreset, threads: usize) -> Result<()> {
+    let scenario = Scenario::open(root)?;
+    let options = FlowCacheOptions {
+        preset,
+        threads,
+        ..FlowCacheOptions::default()
+    };
+    let (report, evaluation) = evaluate_flow(&scenario, &options, |p| {
+        eprint!("\r{}/{} frames", p.done, p.total);
+    })?;
+    eprintln!();
+    eprintln!(
+        "{}: {} computed, {} already cached",
+        report.folder.display(),
+        report.computed,
+        report.already_cached
+    );
+    println!("{}", evaluation.summary());
+    Ok(())
+}
+
 fn main() -> Result<()> {
     match Cli::parse().command {
+        Command::Generate {
+            out,
+            size,
+            frames,
+            seed,
+        } => generate(&out, size, frames, seed),
+        Command::ExportPairs {
+            scenarios,
+            out,
+            every,
+            min_box,
+        } => export_pairs(&scenarios, &out, every, min_box),
         Command::Accuracy {
             pairs,
             presets,
@@ -338,6 +501,16 @@ fn main() -> Result<()> {
             presets,
             threads,
             reps,
-        } => time(&load_pairs(&pairs)?, &presets, threads, reps),
+            max_pairs,
+        } => {
+            let mut set = load_pairs(&pairs)?;
+            set.pairs.truncate(max_pairs.unwrap_or(usize::MAX));
+            time(&set.pairs, &presets, threads, reps)
+        }
+        Command::Evaluate {
+            scenario,
+            preset,
+            threads,
+        } => evaluate(&scenario, preset, threads),
     }
 }

@@ -177,7 +177,8 @@ def main():
         print(f"{s.name}: |gt| mean {np.linalg.norm(gt, axis=-1).mean():.2f}, "
               f"valid {valid.mean() * 100:.1f}%", flush=True)
     with open(os.path.join(a.out, "manifest.json"), "w") as f:
-        json.dump(dict(source="make_pairs.py", width=a.width, height=a.height, pairs=pairs), f, indent=1)
+        json.dump(dict(source="make_pairs.py", truth_everywhere=True, width=a.width, height=a.height,
+                       pairs=pairs), f, indent=1)
 
 
 if __name__ == "__main__":

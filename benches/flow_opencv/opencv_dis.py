@@ -60,7 +60,7 @@ def flows(args):
 
 def timing(args):
     cv2.setNumThreads(args.threads)
-    pairs = load_pairs(args.pairs)
+    pairs = load_pairs(args.pairs)[:args.max_pairs]
     for preset in args.presets:
         dis = make_dis(preset)
         medians, mins = [], []
@@ -74,7 +74,7 @@ def timing(args):
             medians.append(float(np.median(ms)))
             mins.append(float(np.min(ms)))
         print(json.dumps(dict(kind="time", tool="opencv", preset=preset, threads=args.threads,
-                              reps=args.reps, ms_median=float(np.mean(medians)),
+                              reps=args.reps, pairs=len(pairs), ms_median=float(np.mean(medians)),
                               ms_min=float(np.mean(mins)), version=cv2.__version__)), flush=True)
 
 
@@ -88,6 +88,7 @@ def main():
     t.add_argument("pairs")
     t.add_argument("--threads", type=int, default=1)
     t.add_argument("--reps", type=int, default=10)
+    t.add_argument("--max-pairs", type=int, default=None, help="time only the first N pairs")
     for p in (f, t):
         p.add_argument("--presets", type=lambda s: s.split(","), default=PRESETS)
     args = ap.parse_args()

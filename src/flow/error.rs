@@ -77,6 +77,20 @@ pub enum FlowError {
         /// Flow height.
         height: u32,
     },
+    /// Estimating the flow into one frame of a scenario failed.
+    #[error("{scenario}: frame {index}: {source}")]
+    Frame {
+        /// The scenario folder.
+        scenario: PathBuf,
+        /// Index of the frame the flow leads into.
+        index: usize,
+        /// What went wrong.
+        #[source]
+        source: Box<FlowError>,
+    },
+    /// Reading scenario data failed (the error names the file).
+    #[error(transparent)]
+    Sequence(#[from] crate::sequence::SequenceError),
     /// Reading or writing a file failed.
     #[error("{path}: {problem}")]
     File {

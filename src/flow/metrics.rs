@@ -167,20 +167,20 @@ pub fn crop_resize_flow(
 }
 
 /// Mean EPE between estimate and ground truth inside `bbox`, after both are cropped and
-/// resized to `size × size` as HF²-VAD sees them (see [`crop_resize_flow`]). Every resized
-/// pixel counts, like the model's input does.
+/// resized to `size × size` as HF²-VAD sees them (see [`crop_resize_flow`]).
+///
+/// Resized pixels count where the truth is valid (all of them when the truth has no mask);
+/// `None` when no resized pixel is valid.
 pub fn box_endpoint_error(
     estimate: &FlowField,
     truth: &FlowField,
     bbox: PixelBox,
     size: u32,
-) -> Result<f64, FlowError> {
+) -> Result<Option<f64>, FlowError> {
     check_flow_shape(estimate, truth.width, truth.height, "estimated flow")?;
     let a = crop_resize_flow(estimate, bbox, size)?;
     let b = crop_resize_flow(truth, bbox, size)?;
-    let mut truth_all = b;
-    truth_all.valid = None;
-    Ok(endpoint_error(&a, &truth_all)?.mean_all)
+    Ok(endpoint_error(&a, &b)?.mean_valid)
 }
 
 #[cfg(test)]
@@ -260,8 +260,12 @@ mod tests {
             x2: 25.0,
             y2: 20.0,
         };
-        let e = box_endpoint_error(&est, &truth, bbox, 32).unwrap();
+        let e = box_endpoint_error(&est, &truth, bbox, 32).unwrap().unwrap();
         assert!((e - 0.5).abs() < 1e-5, "{e}");
+        // Invalid truth pixels do not count; a box without valid truth has no score.
+        let mut masked = truth.clone();
+        masked.valid = Some(vec![false; 50 * 40]);
+        assert_eq!(box_endpoint_error(&est, &masked, bbox, 32).unwrap(), None);
         let outside = PixelBox {
             x1: 60.0,
             y1: 5.0,

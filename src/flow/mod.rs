@@ -17,14 +17,19 @@
 //! Work is spread with rayon over a fixed partition, so the result does not depend on the
 //! number of threads.
 //!
+//! [`cache`] fills a scenario's on-disk flow cache and [`evaluate`] scores cached flows
+//! against a scenario's ground truth.
+//!
 //! Also here: the Middlebury colour coding ([`colorize_flow`]) and accuracy metrics
 //! ([`endpoint_error`], [`box_endpoint_error`]). The module knows nothing of the model or the
 //! GUI; its only dependency inside the crate is the shared [`FlowField`] type.
 
+pub mod cache;
 mod colorize;
 mod densify;
 mod dis;
 mod error;
+pub mod evaluate;
 mod grid;
 mod inverse_search;
 mod metrics;
