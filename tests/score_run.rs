@@ -12,14 +12,15 @@ use burn::tensor::Device;
 use image::{GrayImage, Luma};
 use score_common::{object, square_box, table, training_stats, write_square_scenario};
 use vadscope::eval::{RocCurve, ScoreMetrics};
+use vadscope::model::stc::Cube;
 use vadscope::model::{
     CheckpointMeta, CubeResult, Detector, Hf2Vad, ModelConfig, ModelError, NoiseRng, TrainingStats,
 };
 use vadscope::score::{
     BoxMatchStats, BoxSource, CacheKey, CubeScorer, FlowSource, FrameMetricOptions, FrameState,
-    FusionWeights, Heatmap, ModelKey, ObjectCube, PixelReferenceMode, PixelRoc, ScenarioScores,
-    ScoreCache, ScoreError, ScoreProgress, ScoreRequest, ScoringPlan, add_scenario_pixels,
-    evaluate_dataset, format_eval_table, run_scoring, score_scenario_with,
+    FusionWeights, Heatmap, ModelKey, PixelReferenceMode, PixelRoc, ScenarioScores, ScoreCache,
+    ScoreError, ScoreProgress, ScoreRequest, ScoringPlan, add_scenario_pixels, evaluate_dataset,
+    format_eval_table, run_scoring, score_scenario_with,
 };
 use vadscope::sequence::{BoxRecord, Domain, FrameId, Scenario, ScenarioMeta, Weather};
 
@@ -80,8 +81,9 @@ fn bbox(x: f32) -> BoxRecord {
 }
 
 /// A cube whose flows are all `flow` and whose frames are all `frame`.
-fn cube(b: BoxRecord, flow: f32, frame: u8) -> ObjectCube {
-    ObjectCube {
+fn cube(b: BoxRecord, flow: f32, frame: u8) -> Cube {
+    Cube {
+        box_index: 0,
         frames: vec![frame; 3 * (T + 1) * AREA],
         flows: vec![flow; 2 * T * AREA],
         bbox: b,
@@ -118,7 +120,7 @@ fn boxes_of(i: usize) -> Result<Vec<BoxRecord>, ScoreError> {
     })
 }
 
-fn cubes_of(i: usize, boxes: &[BoxRecord]) -> Result<Vec<ObjectCube>, ScoreError> {
+fn cubes_of(i: usize, boxes: &[BoxRecord]) -> Result<Vec<Cube>, ScoreError> {
     if i == 3 {
         return Ok(Vec::new());
     }
@@ -274,10 +276,11 @@ fn missing_statistics_and_wrong_cube_sizes_are_errors() {
     let model = ZeroModel {
         stats: Some(training_stats()),
     };
-    let mut short = |_: usize, boxes: &[BoxRecord]| -> Result<Vec<ObjectCube>, ScoreError> {
+    let mut short = |_: usize, boxes: &[BoxRecord]| -> Result<Vec<Cube>, ScoreError> {
         Ok(boxes
             .iter()
-            .map(|b| ObjectCube {
+            .map(|b| Cube {
+                box_index: 0,
                 frames: vec![0; 5],
                 flows: vec![],
                 bbox: *b,
@@ -328,10 +331,11 @@ fn a_real_detector_scores_a_scenario_through_the_seams() {
     let p = detector.config().patch_size;
     let t = detector.config().clip_hist;
     // Hand-made cubes of the right size: grey frames, flow = frame index.
-    let mut cubes = |i: usize, boxes: &[BoxRecord]| -> Result<Vec<ObjectCube>, ScoreError> {
+    let mut cubes = |i: usize, boxes: &[BoxRecord]| -> Result<Vec<Cube>, ScoreError> {
         Ok(boxes
             .iter()
-            .map(|b| ObjectCube {
+            .map(|b| Cube {
+                box_index: 0,
                 frames: vec![100; 3 * (t + 1) * p * p],
                 flows: vec![i as f32; 2 * t * p * p],
                 bbox: *b,
@@ -596,7 +600,7 @@ fn pixel_roc_matches_the_exact_curve_and_reads_scenario_masks() {
     let mut gt =
         |i: usize| -> Result<Vec<BoxRecord>, ScoreError> { Ok(vec![square_box(i as u64)]) };
     // Larger flows (worse reconstruction) in the anomalous frames.
-    let mut cubes = |i: usize, boxes: &[BoxRecord]| -> Result<Vec<ObjectCube>, ScoreError> {
+    let mut cubes = |i: usize, boxes: &[BoxRecord]| -> Result<Vec<Cube>, ScoreError> {
         Ok(boxes
             .iter()
             .map(|b| cube(*b, if i >= 4 { 3.0 } else { 1.0 }, 0))
@@ -627,4 +631,127 @@ fn pixel_roc_matches_the_exact_curve_and_reads_scenario_masks() {
     assert_eq!(curve.positives, 2 * 256);
     assert_eq!(curve.negatives, 4 * 96 * 64 - 2 * 256);
     assert_eq!(curve.auroc(), 1.0, "the anomalous squares score highest");
+}
+
+/// The square scenario with stored flows (u = 4 inside the square, where it moves).
+fn square_with_flow(dir: &std::path::Path, frames: u64) -> PathBuf {
+    use vadscope::sequence::{FrameRecord, ScenarioWriter};
+    let writer = ScenarioWriter::create(&dir.join("flow-scenario"), &ScenarioMeta::default())
+        .expect("writer");
+    for k in 0..frames {
+        let mut flow = vadscope::sequence::FlowField::zeros(96, 64);
+        let b = square_box(k);
+        for y in b.y1 as u32..b.y2 as u32 {
+            for x in b.x1 as u32..b.x2 as u32 {
+                flow.uv[2 * (y as usize * 96 + x as usize)] = 4.0;
+            }
+        }
+        writer
+            .write_frame(&FrameRecord {
+                id: FrameId(k),
+                rgb: score_common::square_frame(k),
+                semantic: None,
+                instance: None,
+                depth_m: None,
+                flow: (k > 0).then_some(flow),
+                action: None,
+                anomaly: None,
+                boxes: vec![square_box(k)],
+                anomalous: Some(k >= 4),
+            })
+            .expect("frame");
+    }
+    writer.finish().expect("finish")
+}
+
+#[test]
+fn score_scenario_cuts_cubes_with_stc_from_stored_and_estimated_flows() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scenario = Scenario::open(&square_with_flow(dir.path(), 6)).expect("open");
+    let detector = detector_with_stats();
+    let never = AtomicBool::new(false);
+    let stored = ScoreRequest::new(BoxSource::GroundTruth, FlowSource::Stored);
+    let cache = vadscope::score::score_scenario(
+        &scenario,
+        &detector,
+        ModelKey(9),
+        &stored,
+        &mut |_| {},
+        &never,
+    )
+    .expect("score with stored flows");
+    let t = cache.table();
+    assert_eq!(t.objects.len(), 6);
+    assert!(t.frames.iter().all(|f| f.state == FrameState::Scored));
+    assert_eq!(t.meta.key.flow, "stored");
+    assert!(cache.path().to_string_lossy().contains("stored"));
+
+    // The same scenario with its flows estimated: another cache beside the first.
+    let estimated = ScoreRequest::new(
+        BoxSource::GroundTruth,
+        FlowSource::Estimated(vadscope::flow::DisPreset::Ultrafast),
+    );
+    let other = vadscope::score::score_scenario(
+        &scenario,
+        &detector,
+        ModelKey(9),
+        &estimated,
+        &mut |_| {},
+        &never,
+    )
+    .expect("score with estimated flows");
+    assert_ne!(other.path(), cache.path());
+    assert_eq!(other.table().objects.len(), 6);
+    assert_ne!(
+        other.table().objects[3].s_r,
+        t.objects[3].s_r,
+        "other flows, other errors"
+    );
+}
+
+#[test]
+fn score_scenario_reports_missing_flows_and_broken_frames() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    // No stored flow at all: frame 0 counts as zero motion, frame 1 needs its flow.
+    let root = write_square_scenario(&dir.path().join("no-flow"), 4, &ScenarioMeta::default());
+    let scenario = Scenario::open(&root).expect("open");
+    let detector = detector_with_stats();
+    let never = AtomicBool::new(false);
+    let request = ScoreRequest::new(BoxSource::GroundTruth, FlowSource::Stored);
+    let error = vadscope::score::score_scenario(
+        &scenario,
+        &detector,
+        ModelKey(9),
+        &request,
+        &mut |_| {},
+        &never,
+    )
+    .expect_err("flows missing")
+    .to_string();
+    assert!(
+        error.contains("no flow stored at frame 1") && error.contains("no-flow"),
+        "{error}"
+    );
+
+    // A frame that cannot be decoded is named by its file.
+    std::fs::write(root.join("RGB_IMG").join("RGB_IMG_2.png"), b"not a png").expect("write");
+    let scenario = Scenario::open(&root).expect("open");
+    let request = ScoreRequest::new(BoxSource::GroundTruth, FlowSource::default());
+    let error = vadscope::score::score_scenario(
+        &scenario,
+        &detector,
+        ModelKey(9),
+        &request,
+        &mut |_| {},
+        &never,
+    )
+    .expect_err("broken frame")
+    .to_string();
+    assert!(error.contains("RGB_IMG_2.png"), "{error}");
+    let request_key = request.key(&scenario, ModelKey(9)).expect("key");
+    assert!(
+        !request_key
+            .path_in(&scenario.cache_dir().expect("dir"))
+            .exists()
+    );
 }

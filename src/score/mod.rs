@@ -11,8 +11,9 @@
 //!   motion boxes ([`motion`]); [`match_boxes`] / [`BoxMatchStats`] / [`match_scenario`] for
 //!   box IoU and recall against the ground truth.
 //! - [`FlowSource`] / [`FlowProvider`]: stored flows, or DIS estimates.
-//! - [`score_scenario_with`] / [`run_scoring`]: the scoring run (progress callback,
-//!   cancellation flag) writing a [`ScoreCache`] at [`CacheKey::path_in`].
+//! - [`score_scenario`]: the scoring run (cubes by `model::stc`, progress callback,
+//!   cancellation flag) writing a [`ScoreCache`] at [`CacheKey::path_in`];
+//!   [`score_scenario_with`] / [`run_scoring`] take any cube source and model.
 //! - [`ScoreCache::open`] / [`ScoreCache::lookup`]: the cache; [`ScoreTable`] is its
 //!   scalar part, [`ScoreCache::frame_maps`] reads one frame's maps.
 //! - [`fusion::frame_scores`], [`fusion::metric_frames`], [`fusion::compose_heatmap`] with
@@ -50,6 +51,6 @@ pub use fusion::{
 };
 pub use motion::MotionParams;
 pub use run::{
-    CubeScorer, CubeSource, FrameBoxes, ObjectCube, ScoreProgress, ScoreRequest, ScoringPlan,
-    run_scoring, score_scenario_with,
+    CubeScorer, CubeSource, FrameBoxes, ScenarioCubes, ScoreProgress, ScoreRequest, ScoringPlan,
+    run_scoring, score_scenario, score_scenario_with,
 };

@@ -3,8 +3,8 @@
 //!
 //! The run is written against three small seams so that each can be replaced in tests and
 //! by later modules: [`FrameBoxes`] (the boxes of a frame; [`BoxProvider`] implements it),
-//! [`CubeSource`] (the cubes of a frame's boxes; cube extraction from a scenario is
-//! `model::stc`'s job) and [`CubeScorer`] (the model; [`Detector`] implements it).
+//! [`CubeSource`] (the cubes of a frame's boxes; [`ScenarioCubes`] cuts them from a
+//! scenario with `model::stc`) and [`CubeScorer`] (the model; [`Detector`] implements it).
 //!
 //! Per object the cache keeps S_r, S_p, the channel-averaged error maps, the predicted
 //! patch and the reconstructed last flow; per frame whether it had boxes and cubes. While
@@ -14,10 +14,12 @@
 //! reference code's per-batch pixel scaling). Batches follow object order (frame by frame)
 //! within the scenario; the reference batches its whole concatenated test set instead.
 
+use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::eval::{RobustStats, quantile_linear};
+use crate::model::stc::{Cube, cubes_at};
 use crate::model::{CubeResult, Detector, ModelError, StatsAccumulator, TrainingStats};
 use crate::sequence::{BoxRecord, FrameId, Scenario};
 
@@ -27,19 +29,7 @@ use super::cache::{
     CacheKey, CacheWriter, FrameEntry, FrameState, ModelKey, ObjectMaps, ObjectScore,
     PixelReference, REFERENCE_BATCH, ScoreCache, ScoreMeta, ScoreTable, frame_ids_hash,
 };
-use super::flows::FlowSource;
-
-/// One spatio-temporal cube: frames and flows of one box, channel-major, vadscope
-/// conventions (RGB bytes, flows in native pixels).
-#[derive(Debug, Clone, PartialEq)]
-pub struct ObjectCube {
-    /// RGB bytes [3·(t+1), P, P], frame i−t first, frame i last.
-    pub frames: Vec<u8>,
-    /// Flows [2·t, P, P] in native pixels, the flow into frame i−t+1 first.
-    pub flows: Vec<f32>,
-    /// The box that cropped it (of frame i).
-    pub bbox: BoxRecord,
-}
+use super::flows::{FlowProvider, FlowSource};
 
 /// The boxes of each frame.
 pub trait FrameBoxes {
@@ -62,11 +52,11 @@ impl<F: FnMut(usize) -> Result<Vec<BoxRecord>, ScoreError>> FrameBoxes for F {
 /// The cubes of a frame's boxes.
 pub trait CubeSource {
     /// Cubes of frame `index`, one per box of `boxes` whose crop is not empty, in box order.
-    fn cubes(&mut self, index: usize, boxes: &[BoxRecord]) -> Result<Vec<ObjectCube>, ScoreError>;
+    fn cubes(&mut self, index: usize, boxes: &[BoxRecord]) -> Result<Vec<Cube>, ScoreError>;
 }
 
-impl<F: FnMut(usize, &[BoxRecord]) -> Result<Vec<ObjectCube>, ScoreError>> CubeSource for F {
-    fn cubes(&mut self, index: usize, boxes: &[BoxRecord]) -> Result<Vec<ObjectCube>, ScoreError> {
+impl<F: FnMut(usize, &[BoxRecord]) -> Result<Vec<Cube>, ScoreError>> CubeSource for F {
+    fn cubes(&mut self, index: usize, boxes: &[BoxRecord]) -> Result<Vec<Cube>, ScoreError> {
         self(index, boxes)
     }
 }
@@ -188,6 +178,78 @@ pub fn score_scenario_with(
     run_scoring(&plan, &mut boxes, cubes, scorer, &path, progress, cancel)
 }
 
+/// The cubes of a scenario's frames, cut by [`cubes_at`] from its frames and the flows of a
+/// [`FlowProvider`].
+pub struct ScenarioCubes<'a> {
+    scenario: &'a Scenario,
+    flows: FlowProvider<'a>,
+    clip_hist: usize,
+    patch: usize,
+}
+
+impl<'a> ScenarioCubes<'a> {
+    /// Cubes of `clip_hist` + 1 frames and `clip_hist` flows of `patch`×`patch` pixels from
+    /// `scenario`, flows from `flow`.
+    pub fn new(scenario: &'a Scenario, flow: FlowSource, clip_hist: usize, patch: usize) -> Self {
+        Self {
+            scenario,
+            flows: FlowProvider::new(scenario, flow),
+            clip_hist,
+            patch,
+        }
+    }
+}
+
+impl CubeSource for ScenarioCubes<'_> {
+    fn cubes(&mut self, index: usize, boxes: &[BoxRecord]) -> Result<Vec<Cube>, ScoreError> {
+        let scenario = self.scenario;
+        let flows = &mut self.flows;
+        // The cube builder speaks ModelError; our own errors (which name the file) are kept
+        // aside and reported as they are.
+        let own_error: RefCell<Option<ScoreError>> = RefCell::new(None);
+        let keep = |e: ScoreError| {
+            let message = e.to_string();
+            own_error.borrow_mut().get_or_insert(e);
+            ModelError::Cube(message)
+        };
+        let result = cubes_at(
+            index,
+            boxes,
+            self.clip_hist,
+            self.patch,
+            &mut |k| scenario.rgb(k).map_err(|e| keep(e.into())),
+            &mut |k| flows.flow(k).map_err(keep),
+        );
+        result.map_err(|source| {
+            own_error.take().unwrap_or_else(|| ScoreError::Model {
+                scenario: scenario.root().to_path_buf(),
+                frame: index,
+                source,
+            })
+        })
+    }
+}
+
+/// Scores `scenario` with `detector`: boxes from `request.boxes`, cubes cut by `model::stc`
+/// with flows from `request.flow`, the model in batches of `request.batch_size`; writes
+/// the cache at [`ScoreRequest::key`]'s path in the scenario's cache folder and returns it
+/// opened. `progress` is called after every batch, `cancel` stops the run (nothing is
+/// written).
+pub fn score_scenario(
+    scenario: &Scenario,
+    detector: &Detector,
+    model: ModelKey,
+    request: &ScoreRequest,
+    progress: &mut dyn FnMut(ScoreProgress),
+    cancel: &AtomicBool,
+) -> Result<ScoreCache, ScoreError> {
+    let config = detector.config();
+    let mut cubes = ScenarioCubes::new(scenario, request.flow, config.clip_hist, config.patch_size);
+    score_scenario_with(
+        scenario, detector, model, request, &mut cubes, progress, cancel,
+    )
+}
+
 /// Quartiles of `values` (NumPy linear interpolation) by selection, without a full sort.
 fn robust_of(values: &mut [f32]) -> RobustStats {
     if values.is_empty() {
@@ -257,7 +319,7 @@ struct Run<'a> {
     batches: Vec<PixelReference>,
     batch: BatchErrors,
     scenario_pixels: StatsAccumulator,
-    pending: Vec<(usize, ObjectCube)>,
+    pending: Vec<(usize, Cube)>,
 }
 
 impl Run<'_> {
@@ -267,7 +329,7 @@ impl Run<'_> {
         if count == 0 {
             return Ok(());
         }
-        let batch: Vec<(usize, ObjectCube)> = self.pending.drain(..count).collect();
+        let batch: Vec<(usize, Cube)> = self.pending.drain(..count).collect();
         let first_frame = batch[0].0;
         let frames: Vec<f32> = batch
             .iter()
