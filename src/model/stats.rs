@@ -6,25 +6,9 @@ use serde::{Deserialize, Serialize};
 
 use super::rng::NoiseRng;
 
-/// Mean and population standard deviation (numpy `np.std`, ddof 0) of one score.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct ScoreStats {
-    /// Mean.
-    pub mean: f64,
-    /// Population standard deviation.
-    pub std: f64,
-}
-
-impl ScoreStats {
-    /// The z-score of `value`; 0 when the std is 0 (every training score was equal).
-    pub fn z(&self, value: f64) -> f64 {
-        if self.std > 0.0 {
-            (value - self.mean) / self.std
-        } else {
-            0.0
-        }
-    }
-}
+/// Mean and population standard deviation (ddof 0) of one score: the same statistic the
+/// evaluation z-scores with, so both share one definition.
+pub type ScoreStats = crate::eval::MeanStd;
 
 /// Robust location and spread of the per-pixel squared errors, taken over all elements of
 /// the error tensors together (as the reference robust-scales whole error tensors).
