@@ -2,8 +2,10 @@
 //! subcommand turns its arguments into library calls and prints the result; errors are
 //! reported with their whole cause chain and a non-zero exit status.
 
+mod eval;
 mod generate;
 mod inspect;
+mod score;
 
 use std::process::ExitCode;
 
@@ -23,6 +25,10 @@ enum Command {
     Generate(generate::GenerateArgs),
     /// Validate a scenario or data set and print a summary.
     Inspect(inspect::InspectArgs),
+    /// Score scenarios with the model into their score caches (`.vadscope/scores/`).
+    Score(score::ScoreArgs),
+    /// Score what is not cached yet and print the paper's tables (Table 2, `--sweep`: 3).
+    Eval(eval::EvalArgs),
 }
 
 /// Parses the command line, runs the subcommand and maps its outcome to an exit status.
@@ -31,6 +37,8 @@ pub fn run() -> ExitCode {
     let outcome = match cli.command {
         Command::Generate(args) => generate::run(args),
         Command::Inspect(args) => inspect::run(args),
+        Command::Score(args) => score::run(args),
+        Command::Eval(args) => eval::run(args),
     };
     match outcome {
         Ok(code) => code,
