@@ -14,9 +14,9 @@ use vadscope::model::{
 };
 use vadscope::score::ScoreCache;
 
-/// Frames per generated scenario: enough for the lead vehicle of the braking scenario to
-/// brake to a standstill inside the scenario (so it has anomalous frames).
-const FRAMES: usize = 40;
+/// Frames per generated scenario: the generator's shortest braking scenario (the lead
+/// vehicle brakes to a standstill inside it, so it has anomalous frames).
+const FRAMES: usize = 80;
 
 fn vadscope(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_vadscope"))

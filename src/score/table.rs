@@ -93,11 +93,11 @@ pub fn render_eval_table(rows: &[EvalRow], format: TableFormat) -> String {
     render(&header, body, 3, format)
 }
 
-/// The weight study (Table 3): box source, the four weights and their preset, frame
-/// metrics, pixel metrics when present.
+/// The weight study (Table 3): box source, the preset the weights are (if any), the four
+/// weights, frame metrics, pixel metrics when present.
 pub fn render_sweep_table(rows: &[SweepRow], format: TableFormat) -> String {
     let pixel = rows.iter().any(|r| r.row.pixel.is_some());
-    let mut header: Vec<&str> = vec!["box source", "w_r", "w_p", "w_r_p", "w_p_p", "preset"];
+    let mut header: Vec<&str> = vec!["box source", "preset", "w_r", "w_p", "w_r_p", "w_p_p"];
     header.extend(METRIC_HEADER);
     if pixel {
         header.extend(PIXEL_HEADER);
@@ -108,19 +108,19 @@ pub fn render_sweep_table(rows: &[SweepRow], format: TableFormat) -> String {
             let w = r.weights;
             let mut cells = vec![
                 r.row.box_source.clone(),
+                r.preset
+                    .unwrap_or(if format == TableFormat::Csv { "" } else { "-" })
+                    .to_string(),
                 w.w_r.to_string(),
                 w.w_p.to_string(),
                 w.w_r_p.to_string(),
                 w.w_p_p.to_string(),
-                r.preset
-                    .unwrap_or(if format == TableFormat::Csv { "" } else { "-" })
-                    .to_string(),
             ];
             cells.extend(metric_cells(&r.row, pixel, format));
             cells
         })
         .collect();
-    render(&header, body, 1, format)
+    render(&header, body, 2, format)
 }
 
 /// The evaluation table as aligned text, one row per line (see [`render_eval_table`]).
