@@ -2,6 +2,7 @@
 //! subcommand turns its arguments into library calls and prints the result; errors are
 //! reported with their whole cause chain and a non-zero exit status.
 
+mod flow;
 mod generate;
 mod inspect;
 
@@ -23,6 +24,8 @@ enum Command {
     Generate(generate::GenerateArgs),
     /// Validate a scenario or data set and print a summary.
     Inspect(inspect::InspectArgs),
+    /// Compute dense optical flow (DIS) for frames without it; evaluate it against stored flow.
+    Flow(flow::FlowArgs),
 }
 
 /// Parses the command line, runs the subcommand and maps its outcome to an exit status.
@@ -31,6 +34,7 @@ pub fn run() -> ExitCode {
     let outcome = match cli.command {
         Command::Generate(args) => generate::run(args),
         Command::Inspect(args) => inspect::run(args),
+        Command::Flow(args) => flow::run(args),
     };
     match outcome {
         Ok(code) => code,
