@@ -2,19 +2,11 @@
 //! scenario's own files, resumes instead of recomputing, evaluates against the stored flow,
 //! and fails with a message on bad input.
 
+mod cli_common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn vadscope(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vadscope"))
-        .args(args)
-        .output()
-        .expect("the vadscope binary runs")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
+use cli_common::{scenario_folders, text, vadscope};
 
 /// Generates one small scenario (with stored ground-truth flow) and returns its folder.
 fn generate(out: &Path, frames: u32, domain: &str, size: &str) -> PathBuf {
@@ -36,16 +28,7 @@ fn generate(out: &Path, frames: u32, domain: &str, size: &str) -> PathBuf {
         "11",
     ]);
     assert!(generated.status.success(), "{}", text(&generated.stderr));
-    std::fs::read_dir(out)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .find(|p| {
-            p.file_name()
-                .unwrap()
-                .to_string_lossy()
-                .starts_with("Scenario_")
-        })
-        .expect("a scenario folder")
+    scenario_folders(out).remove(0)
 }
 
 fn cached_flows(scenario: &Path, preset: &str) -> Vec<PathBuf> {
