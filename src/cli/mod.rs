@@ -4,6 +4,7 @@
 
 mod generate;
 mod inspect;
+mod labels;
 
 use std::process::ExitCode;
 
@@ -23,6 +24,8 @@ enum Command {
     Generate(generate::GenerateArgs),
     /// Validate a scenario or data set and print a summary.
     Inspect(inspect::InspectArgs),
+    /// Open, import, export or show a scenario's labels (crash-safe, undoable).
+    Labels(labels::LabelsArgs),
 }
 
 /// Parses the command line, runs the subcommand and maps its outcome to an exit status.
@@ -31,6 +34,7 @@ pub fn run() -> ExitCode {
     let outcome = match cli.command {
         Command::Generate(args) => generate::run(args),
         Command::Inspect(args) => inspect::run(args),
+        Command::Labels(args) => labels::run(args),
     };
     match outcome {
         Ok(code) => code,
