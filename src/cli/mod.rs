@@ -5,6 +5,7 @@
 mod flow;
 mod generate;
 mod inspect;
+mod labels;
 
 use std::process::ExitCode;
 
@@ -26,6 +27,8 @@ enum Command {
     Inspect(inspect::InspectArgs),
     /// Compute dense optical flow (DIS) for frames without it; evaluate it against stored flow.
     Flow(flow::FlowArgs),
+    /// Open, import, export or show a scenario's labels (crash-safe, undoable).
+    Labels(labels::LabelsArgs),
 }
 
 /// Parses the command line, runs the subcommand and maps its outcome to an exit status.
@@ -35,6 +38,7 @@ pub fn run() -> ExitCode {
         Command::Generate(args) => generate::run(args),
         Command::Inspect(args) => inspect::run(args),
         Command::Flow(args) => flow::run(args),
+        Command::Labels(args) => labels::run(args),
     };
     match outcome {
         Ok(code) => code,
