@@ -7,6 +7,7 @@
 pub mod eval;
 pub mod flow;
 pub mod model;
+pub mod render;
 pub mod score;
 pub mod sequence;
 pub mod synth;
