@@ -2,8 +2,11 @@
 //! subcommand turns its arguments into library calls and prints the result; errors are
 //! reported with their whole cause chain and a non-zero exit status.
 
+mod export;
 mod generate;
 mod inspect;
+mod render;
+mod score_cache;
 
 use std::process::ExitCode;
 
@@ -23,6 +26,10 @@ enum Command {
     Generate(generate::GenerateArgs),
     /// Validate a scenario or data set and print a summary.
     Inspect(inspect::InspectArgs),
+    /// Render views of a scenario's frames (dashboard, frame, pred, flow, timeline, roc) to PNG.
+    Render(render::RenderArgs),
+    /// Write annotated frames and scores.csv (with provenance) of a scenario.
+    Export(export::ExportArgs),
 }
 
 /// Parses the command line, runs the subcommand and maps its outcome to an exit status.
@@ -31,6 +38,8 @@ pub fn run() -> ExitCode {
     let outcome = match cli.command {
         Command::Generate(args) => generate::run(args),
         Command::Inspect(args) => inspect::run(args),
+        Command::Render(args) => render::run(args),
+        Command::Export(args) => export::run(args),
     };
     match outcome {
         Ok(code) => code,
