@@ -2,10 +2,13 @@
 //! subcommand turns its arguments into library calls and prints the result; errors are
 //! reported with their whole cause chain and a non-zero exit status.
 
+mod export;
 mod flow;
 mod generate;
 mod inspect;
 mod labels;
+mod render;
+mod score_cache;
 
 use std::process::ExitCode;
 
@@ -29,6 +32,10 @@ enum Command {
     Flow(flow::FlowArgs),
     /// Open, import, export or show a scenario's labels (crash-safe, undoable).
     Labels(labels::LabelsArgs),
+    /// Render views of a scenario's frames (dashboard, frame, pred, flow, timeline, roc) to PNG.
+    Render(render::RenderArgs),
+    /// Write annotated frames and scores.csv (with provenance) of a scenario.
+    Export(export::ExportArgs),
 }
 
 /// Parses the command line, runs the subcommand and maps its outcome to an exit status.
@@ -39,6 +46,8 @@ pub fn run() -> ExitCode {
         Command::Inspect(args) => inspect::run(args),
         Command::Flow(args) => flow::run(args),
         Command::Labels(args) => labels::run(args),
+        Command::Render(args) => render::run(args),
+        Command::Export(args) => export::run(args),
     };
     match outcome {
         Ok(code) => code,
