@@ -35,8 +35,8 @@ pub struct EvalArgs {
     /// HF²-VAD_AD paper text, 10,0.1,10,0.1.
     #[arg(long, value_name = "wr,wp,wrp,wpp", value_parser = parse_weights, conflicts_with = "preset")]
     weights: Option<FusionWeights>,
-    /// A weight preset: `paper-text` (10 / 0.1), `paper-code` (the AD code's 0.1 / 10),
-    /// `original` (HF²-VAD's 1 / 0.1).
+    /// A weight preset: `paper-text` (10 / 0.1), `paper-code` or `ad-code` (the AD code's
+    /// 0.1 / 10), `original` (HF²-VAD's 1 / 0.1).
     #[arg(long, value_enum)]
     preset: Option<WeightPreset>,
     /// Median-filter kernel over each scenario's frame scores (0 or 1: no filter).
@@ -74,6 +74,8 @@ pub struct EvalArgs {
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum WeightPreset {
     PaperText,
+    /// The AD code's weights (`ad-code`, as `vadscope render` names them, works too).
+    #[value(alias = "ad-code")]
     PaperCode,
     Original,
 }

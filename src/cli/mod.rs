@@ -3,9 +3,14 @@
 //! reported with their whole cause chain and a non-zero exit status.
 
 mod eval;
+mod export;
+mod flow;
 mod generate;
 mod inspect;
+mod labels;
+mod render;
 mod score;
+mod score_cache;
 
 use std::process::ExitCode;
 
@@ -29,6 +34,14 @@ enum Command {
     Score(score::ScoreArgs),
     /// Score what is not cached yet and print the paper's tables (Table 2, `--sweep`: 3).
     Eval(eval::EvalArgs),
+    /// Compute dense optical flow (DIS) for frames without it; evaluate it against stored flow.
+    Flow(flow::FlowArgs),
+    /// Open, import, export or show a scenario's labels (crash-safe, undoable).
+    Labels(labels::LabelsArgs),
+    /// Render views of a scenario's frames (dashboard, frame, pred, flow, timeline, roc) to PNG.
+    Render(render::RenderArgs),
+    /// Write annotated frames and scores.csv (with provenance) of a scenario.
+    Export(export::ExportArgs),
 }
 
 /// Parses the command line, runs the subcommand and maps its outcome to an exit status.
@@ -39,6 +52,10 @@ pub fn run() -> ExitCode {
         Command::Inspect(args) => inspect::run(args),
         Command::Score(args) => score::run(args),
         Command::Eval(args) => eval::run(args),
+        Command::Flow(args) => flow::run(args),
+        Command::Labels(args) => labels::run(args),
+        Command::Render(args) => render::run(args),
+        Command::Export(args) => export::run(args),
     };
     match outcome {
         Ok(code) => code,
