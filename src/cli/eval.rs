@@ -18,6 +18,7 @@ use vadscope::score::{
 use vadscope::sequence::Scenario;
 
 use super::score::{Report, RunArgs, Scorer, open_scenarios, parse_box_source};
+use super::score_cache::{PresetArg, parse_weights};
 
 /// Options of `vadscope eval`.
 #[derive(Debug, Args)]
@@ -35,10 +36,10 @@ pub struct EvalArgs {
     /// HF²-VAD_AD paper text, 10,0.1,10,0.1.
     #[arg(long, value_name = "wr,wp,wrp,wpp", value_parser = parse_weights, conflicts_with = "preset")]
     weights: Option<FusionWeights>,
-    /// A weight preset: `paper-text` (10 / 0.1), `paper-code` or `ad-code` (the AD code's
+    /// A weight preset: `paper-text` (10 / 0.1), `ad-code` or `paper-code` (the AD code's
     /// 0.1 / 10), `original` (HF²-VAD's 1 / 0.1).
     #[arg(long, value_enum)]
-    preset: Option<WeightPreset>,
+    preset: Option<PresetArg>,
     /// Median-filter kernel over each scenario's frame scores (0 or 1: no filter).
     #[arg(long, default_value_t = 17, value_name = "K")]
     median: usize,
@@ -71,25 +72,6 @@ pub struct EvalArgs {
     format: FormatArg,
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum WeightPreset {
-    PaperText,
-    /// The AD code's weights (`ad-code`, as `vadscope render` names them, works too).
-    #[value(alias = "ad-code")]
-    PaperCode,
-    Original,
-}
-
-impl WeightPreset {
-    fn weights(self) -> FusionWeights {
-        match self {
-            Self::PaperText => FusionWeights::PAPER_TEXT,
-            Self::PaperCode => FusionWeights::AD_CODE,
-            Self::Original => FusionWeights::ORIGINAL,
-        }
-    }
-}
-
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum ByKey {
     Domain,
@@ -120,22 +102,6 @@ enum FormatArg {
     Text,
     Csv,
     Json,
-}
-
-/// Parses `--weights`: four finite numbers separated by commas.
-fn parse_weights(text: &str) -> Result<FusionWeights, String> {
-    let values: Vec<f64> = text
-        .split(',')
-        .map(|v| v.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
-        .collect::<Option<_>>()
-        .filter(|v: &Vec<f64>| v.len() == 4)
-        .ok_or_else(|| format!("'{text}': expected four numbers w_r,w_p,w_r_p,w_p_p"))?;
-    Ok(FusionWeights {
-        w_r: values[0],
-        w_p: values[1],
-        w_r_p: values[2],
-        w_p_p: values[3],
-    })
 }
 
 /// What `--format json` prints.
@@ -194,7 +160,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     };
     let weights = args
         .weights
-        .or(args.preset.map(WeightPreset::weights))
+        .or(args.preset.map(PresetArg::weights))
         .unwrap_or_default();
     let options = FrameMetricOptions {
         median_kernel: args.median,
