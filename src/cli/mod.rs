@@ -2,12 +2,14 @@
 //! subcommand turns its arguments into library calls and prints the result; errors are
 //! reported with their whole cause chain and a non-zero exit status.
 
+mod eval;
 mod export;
 mod flow;
 mod generate;
 mod inspect;
 mod labels;
 mod render;
+mod score;
 mod score_cache;
 
 use std::process::ExitCode;
@@ -28,6 +30,10 @@ enum Command {
     Generate(generate::GenerateArgs),
     /// Validate a scenario or data set and print a summary.
     Inspect(inspect::InspectArgs),
+    /// Score scenarios with the model into their score caches (`.vadscope/scores/`).
+    Score(score::ScoreArgs),
+    /// Score what is not cached yet and print the paper's tables (Table 2, `--sweep`: 3).
+    Eval(eval::EvalArgs),
     /// Compute dense optical flow (DIS) for frames without it; evaluate it against stored flow.
     Flow(flow::FlowArgs),
     /// Open, import, export or show a scenario's labels (crash-safe, undoable).
@@ -44,6 +50,8 @@ pub fn run() -> ExitCode {
     let outcome = match cli.command {
         Command::Generate(args) => generate::run(args),
         Command::Inspect(args) => inspect::run(args),
+        Command::Score(args) => score::run(args),
+        Command::Eval(args) => eval::run(args),
         Command::Flow(args) => flow::run(args),
         Command::Labels(args) => labels::run(args),
         Command::Render(args) => render::run(args),
