@@ -62,7 +62,7 @@ impl ScoreScale {
     /// Position of `score` on the scale, in [0, 1].
     pub fn position(&self, score: f64) -> f32 {
         let span = self.high - self.low;
-        if !(span.is_finite() && span > 0.0) || !score.is_finite() {
+        if !(span.is_finite() && span > 0.0 && score.is_finite()) {
             return 0.0;
         }
         ((score - self.low) / span).clamp(0.0, 1.0) as f32

@@ -259,8 +259,12 @@ fn draw_series(
         // Fewer frames than columns: straight segments between frame centres.
         let end = layout.frames.end.min(values.len());
         let mut previous: Option<(i32, i32)> = None;
-        for k in layout.frames.start.min(end)..end {
-            let v = values[k];
+        let start = layout.frames.start.min(end);
+        for (k, &v) in values[start..end]
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (start + i, v))
+        {
             if !v.is_finite() {
                 previous = None;
                 continue;
