@@ -4,6 +4,7 @@
 
 mod generate;
 mod inspect;
+mod train;
 
 use std::process::ExitCode;
 
@@ -23,6 +24,8 @@ enum Command {
     Generate(generate::GenerateArgs),
     /// Validate a scenario or data set and print a summary.
     Inspect(inspect::InspectArgs),
+    /// Train HF²-VAD_AD (three stages) on normal driving scenarios.
+    Train(train::TrainArgs),
 }
 
 /// Parses the command line, runs the subcommand and maps its outcome to an exit status.
@@ -31,6 +34,7 @@ pub fn run() -> ExitCode {
     let outcome = match cli.command {
         Command::Generate(args) => generate::run(args),
         Command::Inspect(args) => inspect::run(args),
+        Command::Train(args) => train::run(args),
     };
     match outcome {
         Ok(code) => code,
