@@ -4,9 +4,11 @@
 //! The library is GUI-free below `app`; see `ARCHITECTURE.md` for the module map and the
 //! one-way data flow.
 
+pub mod annotate;
 pub mod eval;
 pub mod flow;
 pub mod model;
+pub mod render;
 pub mod score;
 pub mod sequence;
 pub mod synth;
