@@ -11,6 +11,7 @@ mod labels;
 mod render;
 mod score;
 mod score_cache;
+mod train;
 
 use std::process::ExitCode;
 
@@ -42,6 +43,8 @@ enum Command {
     Render(render::RenderArgs),
     /// Write annotated frames and scores.csv (with provenance) of a scenario.
     Export(export::ExportArgs),
+    /// Train HF²-VAD_AD (three stages) on normal driving scenarios.
+    Train(train::TrainArgs),
 }
 
 /// Parses the command line, runs the subcommand and maps its outcome to an exit status.
@@ -56,6 +59,7 @@ pub fn run() -> ExitCode {
         Command::Labels(args) => labels::run(args),
         Command::Render(args) => render::run(args),
         Command::Export(args) => export::run(args),
+        Command::Train(args) => train::run(args),
     };
     match outcome {
         Ok(code) => code,
