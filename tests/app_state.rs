@@ -6,8 +6,7 @@
 mod app_common;
 
 use app_common::{
-    BRAKING_FRAMES, NORMAL_FRAMES, generate_dataset, scored_state, setup, state_of_tables, table,
-    tiny_checkpoint,
+    ANOMALY, FRAMES, generate_dataset, scored_state, setup, state_of_tables, table, tiny_checkpoint,
 };
 use vadscope::app::{
     Action, AppState, FailureKind, LogLevel, Playback, ScoreStatus, ThresholdMode, ViewSettings,
@@ -258,22 +257,19 @@ fn the_scoring_job_scores_generated_scenarios_and_reuses_their_caches() {
             entry.name,
             entry.status.label()
         );
-        let frames = if entry.name.contains("braking") {
-            BRAKING_FRAMES
-        } else {
-            NORMAL_FRAMES
-        };
-        assert_eq!(entry.frames, frames as usize);
+        assert_eq!(entry.frames, FRAMES as usize);
     }
-    assert!(
-        state.labels().iter().any(|&l| l),
-        "the braking scenario has an anomaly"
+    let onset = state.labels().iter().position(|&l| l);
+    assert_eq!(
+        onset,
+        Some(*ANOMALY.start() as usize),
+        "the city scenario's labels are read"
     );
     let analysis = state.current_analysis().expect("fused");
-    assert_eq!(analysis.series.fused.len(), BRAKING_FRAMES as usize);
+    assert_eq!(analysis.series.fused.len(), FRAMES as usize);
     assert!(analysis.series.fused.iter().all(|s| s.is_finite()));
     assert_eq!(state.dataset_metrics().scenarios, 2);
-    let frame = (0..BRAKING_FRAMES as usize)
+    let frame = (0..FRAMES as usize)
         .find(|&i| {
             state.apply(Action::Seek(i));
             !state.frame_objects().is_empty()
@@ -357,8 +353,8 @@ fn malformed_data_ends_up_as_errors_in_the_state() {
         .expect("list")
         .flatten()
         .map(|e| e.path())
-        .find(|p| p.to_string_lossy().contains("normal"))
-        .expect("normal scenario");
+        .find(|p| p.to_string_lossy().contains("highway"))
+        .expect("highway scenario");
     let scenario = Scenario::open(&normal).expect("open");
     let request: ScoreRequest = setup(&model).request;
     let key = request
@@ -376,7 +372,7 @@ fn malformed_data_ends_up_as_errors_in_the_state() {
         let ok = matches!(entry.status, ScoreStatus::Ready(_));
         let failed = matches!(entry.status, ScoreStatus::Failed(_)) || entry.error.is_some();
         assert!(ok || failed, "{i} {}: {}", entry.name, entry.status.label());
-        if entry.name.contains("braking") {
+        if entry.name.contains("city") {
             assert!(ok, "the good scenario is scored");
         } else {
             assert!(failed, "{} is reported", entry.name);

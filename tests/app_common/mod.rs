@@ -16,13 +16,14 @@ use vadscope::score::{
     BoxSource, CacheKey, FlowSource, FrameEntry, FrameState, ModelKey, ObjectScore, PixelReference,
     ScoreMeta, ScoreRequest, ScoreTable,
 };
+use vadscope::sequence::labels::write_frame_labels;
 use vadscope::sequence::{Domain, FrameId, Modality, Weather};
 use vadscope::synth::{ScenarioKind, ScenarioSpec, generate_scenario_without};
 
-/// Frames of the generated braking scenario (the generator's minimum for braking).
-pub const BRAKING_FRAMES: u32 = 80;
-/// Frames of the generated normal scenario.
-pub const NORMAL_FRAMES: u32 = 16;
+/// Frames of each generated scenario.
+pub const FRAMES: u32 = 16;
+/// Frames labelled anomalous in the city scenario.
+pub const ANOMALY: std::ops::RangeInclusive<u64> = 8..=13;
 
 /// Training statistics of the tiny model: S_r ~ (2, 1), S_p ~ (0.5, 0.25).
 pub fn training_stats() -> TrainingStats {
@@ -49,10 +50,15 @@ pub fn training_stats() -> TrainingStats {
     }
 }
 
-/// A tiny randomly initialised checkpoint (the parity network size, vadscope's input
-/// conventions) at `dir/tiny.safetensors`.
+/// A tiny randomly initialised checkpoint at `dir/tiny.safetensors`: the parity network's
+/// widths on 16×16 patches with two past frames, vadscope's input conventions.
 pub fn tiny_checkpoint(dir: &Path) -> PathBuf {
     let config = ModelConfig {
+        patch_size: 16,
+        clip_hist: 2,
+        num_flows: 2,
+        num_slots: 8,
+        shrink_thres: 1.0 / 8.0,
         conventions: InputConventions::vadscope(),
         ..ModelConfig::parity()
     };
@@ -68,32 +74,28 @@ pub fn tiny_checkpoint(dir: &Path) -> PathBuf {
     path
 }
 
-/// A data set of two generated 96×64 scenarios (a sudden braking in the city,
-/// [`BRAKING_FRAMES`] frames; normal highway driving in rain, [`NORMAL_FRAMES`]) with their
-/// exact flow, under `dir/data`.
+/// A data set of two generated 96×64 scenarios of [`FRAMES`] frames with their exact flow,
+/// under `dir/data`: city driving in sun whose `frame_labels.csv` is rewritten to mark
+/// [`ANOMALY`] anomalous (a generated sudden braking needs 80 frames, too many to score
+/// quickly), and normal highway driving in rain.
 pub fn generate_dataset(dir: &Path) -> PathBuf {
     let root = dir.join("data");
-    for (kind, domain, weather, seed, frames) in [
-        (
-            ScenarioKind::Braking,
-            Domain::City,
-            Weather::Sun,
-            3,
-            BRAKING_FRAMES,
-        ),
-        (
-            ScenarioKind::Normal,
-            Domain::Highway,
-            Weather::Rain,
-            4,
-            NORMAL_FRAMES,
-        ),
+    for (domain, weather, seed) in [
+        (Domain::City, Weather::Sun, 3),
+        (Domain::Highway, Weather::Rain, 4),
     ] {
-        let mut spec = ScenarioSpec::new(kind, domain, weather, seed);
-        spec.frames = frames;
+        let mut spec = ScenarioSpec::new(ScenarioKind::Normal, domain, weather, seed);
+        spec.frames = FRAMES;
         spec.width = 96;
         spec.height = 64;
-        generate_scenario_without(&spec, &root, &[Modality::Depth], |_| {}).expect("generate");
+        let folder =
+            generate_scenario_without(&spec, &root, &[Modality::Depth], |_| {}).expect("generate");
+        if domain == Domain::City {
+            let labels: Vec<(FrameId, bool)> = (0..u64::from(FRAMES))
+                .map(|k| (FrameId(k), ANOMALY.contains(&k)))
+                .collect();
+            write_frame_labels(&folder.join("frame_labels.csv"), &labels).expect("labels");
+        }
     }
     root
 }

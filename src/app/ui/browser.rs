@@ -8,7 +8,7 @@ use crate::app::state::{Action, AppState};
 pub fn show(ui: &mut egui::Ui, state: &mut AppState) {
     ui.heading("Scenarios");
     let Some(dataset) = state.dataset() else {
-        ui.weak("Open a scenario or data-set folder (File ▸ Open, Ctrl+O, or drop it here).");
+        ui.weak("Open a scenario or data-set folder (File > Open, Ctrl+O, or drop it here).");
         return;
     };
     ui.weak(dataset.root.display().to_string());

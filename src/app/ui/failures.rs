@@ -125,7 +125,7 @@ impl FailurePanel {
                     if ui.add(edit).changed() {
                         *retag = Some((index, tag.clone()));
                     }
-                    ui.menu_button("＋", |ui| {
+                    ui.menu_button("+", |ui| {
                         for suggestion in SUGGESTED_TAGS {
                             if ui.button(suggestion).clicked() {
                                 *retag = Some((index, suggestion.to_string()));

@@ -49,7 +49,7 @@ impl MainView {
         if state.entry().is_none() {
             ui.centered_and_justified(|ui| {
                 ui.label(
-                    "Open a scenario or data set: File ▸ Open (Ctrl+O), or drop a folder here.",
+                    "Open a scenario or data set: File > Open (Ctrl+O), or drop a folder here.",
                 );
             });
             return;

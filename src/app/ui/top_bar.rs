@@ -79,7 +79,7 @@ pub fn show(
 /// Scenario, frame index of frame count, AnoVox id and ground truth, always visible.
 fn where_am_i(ui: &mut egui::Ui, state: &AppState) {
     let Some(entry) = state.entry() else {
-        ui.label("No data set open: File ▸ Open, or drop a folder here.");
+        ui.label("No data set open: File > Open, or drop a folder here.");
         return;
     };
     ui.strong(&entry.name);
@@ -93,13 +93,13 @@ fn where_am_i(ui: &mut egui::Ui, state: &AppState) {
     if info.anomalous {
         ui.colored_label(
             egui::Color32::from_rgb(230, 80, 60),
-            "● anomaly (ground truth)",
+            "ANOMALY (ground truth)",
         );
     } else {
         ui.weak("normal (ground truth)");
     }
     if state.playback().is_playing() {
-        ui.label("▶ playing");
+        ui.label("playing");
     }
 }
 
