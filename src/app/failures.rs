@@ -187,16 +187,6 @@ impl FailureTags {
         }
     }
 
-    /// Number of tagged cases.
-    pub fn len(&self) -> usize {
-        self.tags.len()
-    }
-
-    /// Whether no case is tagged.
-    pub fn is_empty(&self) -> bool {
-        self.tags.is_empty()
-    }
-
     /// Reads the tags at `path`; no file means no tags.
     pub fn load(path: &Path) -> Result<Self, AppError> {
         let text = match std::fs::read_to_string(path) {

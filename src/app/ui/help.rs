@@ -1,5 +1,5 @@
 //! The help overlay: every key binding (from the one table in `input`) and the mouse
-//! gestures, in a window that F1, ? or Esc closes.
+//! gestures, in a window that F1 or ? toggles.
 
 use crate::app::state::{Action, AppState};
 

@@ -89,11 +89,6 @@ impl ViewerApp {
         &mut self.state
     }
 
-    /// The layout as it stands.
-    pub fn layout(&self) -> &Layout {
-        &self.layout
-    }
-
     /// Opens a scenario or data set and remembers it among the recent ones.
     pub fn open(&mut self, path: &std::path::Path) {
         if self.state.open(path) {
