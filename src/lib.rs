@@ -4,6 +4,7 @@
 //! The library is GUI-free below `app`; see `ARCHITECTURE.md` for the module map and the
 //! one-way data flow.
 
+pub mod annotate;
 pub mod app;
 pub mod eval;
 pub mod flow;

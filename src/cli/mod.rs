@@ -3,8 +3,10 @@
 //! reported with their whole cause chain and a non-zero exit status.
 
 mod export;
+mod flow;
 mod generate;
 mod inspect;
+mod labels;
 mod render;
 mod score_cache;
 mod view;
@@ -31,6 +33,10 @@ enum Command {
     Generate(generate::GenerateArgs),
     /// Validate a scenario or data set and print a summary.
     Inspect(inspect::InspectArgs),
+    /// Compute dense optical flow (DIS) for frames without it; evaluate it against stored flow.
+    Flow(flow::FlowArgs),
+    /// Open, import, export or show a scenario's labels (crash-safe, undoable).
+    Labels(labels::LabelsArgs),
     /// Render views of a scenario's frames (dashboard, frame, pred, flow, timeline, roc) to PNG.
     Render(render::RenderArgs),
     /// Write annotated frames and scores.csv (with provenance) of a scenario.
@@ -45,6 +51,8 @@ pub fn run() -> ExitCode {
         Some(Command::View(args)) => view::run_view(args),
         Some(Command::Generate(args)) => generate::run(args),
         Some(Command::Inspect(args)) => inspect::run(args),
+        Some(Command::Flow(args)) => flow::run(args),
+        Some(Command::Labels(args)) => labels::run(args),
         Some(Command::Render(args)) => render::run(args),
         Some(Command::Export(args)) => export::run(args),
     };

@@ -6,7 +6,7 @@
 //! | [`DetectionFormat::BoxesCsv`] | AnoVox `boxes.csv` | `frame,track_id,x1,y1,x2,y2,class,score,anomalous` | AnoVox frame id |
 //! | [`DetectionFormat::Mot`] | MOTChallenge `gt.txt` / `det.txt` | `frame,id,left,top,width,height[,conf[,class[,...]]]` | frame number, see [`FrameNumbering`] |
 //! | [`DetectionFormat::Coco`] | COCO JSON: a results array, or a dataset object with `images` and `annotations` | `bbox` = [x, y, w, h] | `images[].file_name` when present, else `image_id` by [`FrameNumbering`] |
-//! | [`DetectionFormat::Yolo`] | a folder of YOLO `.txt` files, one per frame (or one file) | `class cx cy w h [conf]`, normalised to [0, 1] | file stem |
+//! | [`DetectionFormat::Yolo`] | a folder of YOLO `.txt` files, one per frame (or one file) | `class cx cy w h [conf [track_id]]`, normalised to [0, 1] | file stem |
 //!
 //! A file stem names a frame when it equals the stem of a frame's RGB file, else through the
 //! integer after its last `_` (or its digits), read as an AnoVox frame id. Rows whose frame
@@ -37,7 +37,7 @@ pub enum DetectionFormat {
 }
 
 impl DetectionFormat {
-    /// Guesses the format: a folder or `.txt` file whose first data line has 5–6
+    /// Guesses the format: a folder or `.txt` file whose first data line has 5–7
     /// space-separated fields is YOLO; `.json` is COCO; a file whose first line starts with
     /// `frame,` is `boxes.csv`; other `.txt`/`.csv` files are MOT.
     pub fn guess(path: &Path) -> Result<Self, ScoreError> {
@@ -58,7 +58,7 @@ impl DetectionFormat {
             .unwrap_or("");
         if first.starts_with("frame,") {
             Ok(Self::BoxesCsv)
-        } else if !first.contains(',') && (5..=6).contains(&first.split_whitespace().count()) {
+        } else if !first.contains(',') && (5..=7).contains(&first.split_whitespace().count()) {
             Ok(Self::Yolo)
         } else if first.contains(',') {
             Ok(Self::Mot)
@@ -227,8 +227,9 @@ pub fn parse_mot(path: &Path, text: &str) -> Result<Vec<RawDetection>, ScoreErro
     Ok(out)
 }
 
-/// Parses the lines of one YOLO file (`class cx cy w h [conf]`, normalised) for frame
-/// `frame`, scaling to an image of `width`×`height` pixels.
+/// Parses the lines of one YOLO file (`class cx cy w h [conf [track_id]]`, normalised; the
+/// track id as tracking exports write it, 0 when absent) for frame `frame`, scaling to an
+/// image of `width`×`height` pixels.
 pub fn parse_yolo(
     path: &Path,
     text: &str,
@@ -245,12 +246,12 @@ pub fn parse_yolo(
             continue;
         }
         let fields: Vec<&str> = row.split_whitespace().collect();
-        if !(5..=6).contains(&fields.len()) {
+        if !(5..=7).contains(&fields.len()) {
             return Err(ScoreError::line(
                 path,
                 line,
                 format!(
-                    "{} fields; YOLO rows are `class cx cy w h [conf]`",
+                    "{} fields; YOLO rows are `class cx cy w h [conf [track_id]]`",
                     fields.len()
                 ),
             ));
@@ -275,11 +276,15 @@ pub fn parse_yolo(
             Some(f) => number(path, line, f, "conf")?,
             None => 1.0,
         };
+        let track = match fields.get(6) {
+            Some(f) => optional_id(path, line, f, "track_id")?,
+            None => 0,
+        };
         let (w, h) = (v[2] * iw, v[3] * ih);
         out.push(RawDetection {
             frame: frame.clone(),
             bbox: record(
-                0,
+                track,
                 class,
                 [v[0] * iw - w / 2.0, v[1] * ih - h / 2.0, w, h],
                 score,
@@ -587,5 +592,15 @@ mod tests {
             (b.x1, b.y1, b.x2, b.y2, b.class),
             (75.0, 25.0, 125.0, 75.0, 2)
         );
+        let tracked = parse_yolo(
+            Path::new("f.txt"),
+            "2 0.5 0.5 0.25 0.5 0.7 12\n",
+            FrameRef::Id(FrameId(1)),
+            200,
+            100,
+        )
+        .expect("valid");
+        assert_eq!(tracked[0].bbox.track_id, 12);
+        assert_eq!(b.track_id, 0);
     }
 }

@@ -1,0 +1,14 @@
+//! Integration tests of `vadscope::annotate`: edits with undo and redo, interpolation and
+//! the per-frame queries, import/export round trips, crash-safe saving (a SIGKILL in the
+//! middle of a burst of edits) and damaged label files.
+
+mod score_common;
+
+#[path = "annotate/common.rs"]
+mod common;
+#[path = "annotate/edits.rs"]
+mod edits;
+#[path = "annotate/formats.rs"]
+mod formats;
+#[path = "annotate/storage.rs"]
+mod storage;
