@@ -12,21 +12,26 @@ mod render;
 mod score;
 mod score_cache;
 mod train;
+mod view;
 
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
 /// vadscope: view, score and label video anomaly detection in driving scenarios.
+///
+/// With no subcommand, opens the viewer on the bundled sample scenarios.
 #[derive(Debug, Parser)]
 #[command(name = "vadscope", version, about, long_about = None)]
 struct Cli {
     #[command(subcommand)]
-    command: Command,
+    command: Option<Command>,
 }
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Open the desktop viewer on a scenario or data set (the default command).
+    View(view::ViewArgs),
     /// Generate synthetic AnoVox-style driving scenarios with exact ground truth.
     Generate(generate::GenerateArgs),
     /// Validate a scenario or data set and print a summary.
@@ -51,15 +56,17 @@ enum Command {
 pub fn run() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
-        Command::Generate(args) => generate::run(args),
-        Command::Inspect(args) => inspect::run(args),
-        Command::Score(args) => score::run(args),
-        Command::Eval(args) => eval::run(args),
-        Command::Flow(args) => flow::run(args),
-        Command::Labels(args) => labels::run(args),
-        Command::Render(args) => render::run(args),
-        Command::Export(args) => export::run(args),
-        Command::Train(args) => train::run(args),
+        None => view::run_view(view::ViewArgs::default()),
+        Some(Command::View(args)) => view::run_view(args),
+        Some(Command::Generate(args)) => generate::run(args),
+        Some(Command::Inspect(args)) => inspect::run(args),
+        Some(Command::Flow(args)) => flow::run(args),
+        Some(Command::Train(args)) => train::run(args),
+        Some(Command::Score(args)) => score::run(args),
+        Some(Command::Eval(args)) => eval::run(args),
+        Some(Command::Render(args)) => render::run(args),
+        Some(Command::Export(args)) => export::run(args),
+        Some(Command::Labels(args)) => labels::run(args),
     };
     match outcome {
         Ok(code) => code,
