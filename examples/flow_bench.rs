@@ -12,9 +12,9 @@
 //!   and bilinear resize as HF²-VAD does) for vadscope's flow or for flows computed
 //!   elsewhere and stored as Middlebury `.flo` files (`--external DIR`, files
 //!   `DIR/<preset>/<pair>.flo`), so both tools are scored by the same code;
-//! * `time`: milliseconds per frame pair on a given number of threads;
-//! * `evaluate`: fills a scenario's flow cache and scores it against the stored flow, with
-//!   the library's `flow::evaluate` (what `vadscope flow --evaluate` reports).
+//! * `time`: milliseconds per frame pair on a given number of threads.
+//!
+//! Scoring a scenario's flow cache against its stored flow is `vadscope flow --evaluate`.
 //!
 //! `accuracy` and `time` print one JSON object per line.
 
@@ -26,8 +26,6 @@ use clap::{Parser, Subcommand};
 use image::GrayImage;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
-use vadscope::flow::cache::FlowCacheOptions;
-use vadscope::flow::evaluate::evaluate_flow;
 use vadscope::flow::{
     DisFlow, DisParams, DisPreset, FlowField, FlowFrame, PixelBox, box_endpoint_error,
     endpoint_error,
@@ -122,17 +120,6 @@ enum Command {
         /// Time only the first N pairs.
         #[arg(long)]
         max_pairs: Option<usize>,
-    },
-    /// Fill a scenario's flow cache and score it against the stored flow.
-    Evaluate {
-        /// Scenario folder.
-        scenario: PathBuf,
-        /// DIS preset.
-        #[arg(long, default_value = "medium")]
-        preset: DisPreset,
-        /// Worker threads (0: one per core).
-        #[arg(long, default_value_t = 0)]
-        threads: usize,
     },
 }
 
@@ -444,27 +431,6 @@ fn time(pairs: &[Pair], presets: &[DisPreset], threads: usize, reps: usize) -> R
     })
 }
 
-fn evaluate(root: &Path, preset: DisPreset, threads: usize) -> Result<()> {
-    let scenario = Scenario::open(root)?;
-    let options = FlowCacheOptions {
-        preset,
-        threads,
-        ..FlowCacheOptions::default()
-    };
-    let (report, evaluation) = evaluate_flow(&scenario, &options, |p| {
-        eprint!("\r{}/{} frames", p.done, p.total);
-    })?;
-    eprintln!();
-    eprintln!(
-        "{}: {} computed, {} already cached",
-        report.folder.display(),
-        report.computed,
-        report.already_cached
-    );
-    println!("{}", evaluation.summary());
-    Ok(())
-}
-
 fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Generate {
@@ -507,10 +473,5 @@ fn main() -> Result<()> {
             set.pairs.truncate(max_pairs.unwrap_or(usize::MAX));
             time(&set.pairs, &presets, threads, reps)
         }
-        Command::Evaluate {
-            scenario,
-            preset,
-            threads,
-        } => evaluate(&scenario, preset, threads),
     }
 }

@@ -8,6 +8,7 @@ pub mod annotate;
 pub mod eval;
 pub mod flow;
 pub mod model;
+pub mod render;
 pub mod score;
 pub mod sequence;
 pub mod synth;

@@ -1,19 +1,11 @@
 //! The `vadscope` binary end to end: `generate` writes scenarios that `inspect` reads back,
 //! and bad paths or arguments fail with a message instead of a panic.
 
+mod cli_common;
+
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn vadscope(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vadscope"))
-        .args(args)
-        .output()
-        .expect("the vadscope binary runs")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
+use cli_common::{scenario_folders, text, vadscope};
 
 #[test]
 fn generate_then_inspect_round_trip() {
@@ -43,16 +35,7 @@ fn generate_then_inspect_round_trip() {
         text(&generated.stderr)
     );
 
-    let scenarios: Vec<_> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| {
-            p.file_name()
-                .unwrap()
-                .to_string_lossy()
-                .starts_with("Scenario_")
-        })
-        .collect();
+    let scenarios = scenario_folders(dir.path());
     assert_eq!(scenarios.len(), 1);
     for folder in [
         "RGB_IMG",

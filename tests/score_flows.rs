@@ -68,7 +68,12 @@ fn stored_estimated_and_fallback_flows() {
     let again = estimated.flow(3).expect("estimate").expect("some");
     assert!(Arc::ptr_eq(&f3, &again), "kept, not estimated twice");
     let f1 = estimated.flow(1).expect("estimate").expect("some");
-    assert_ne!(f1.at(10, 10), [4.0, 0.0], "stored flows are ignored");
+    let stored_f1 = stored.flow(1).expect("read").expect("stored");
+    assert_ne!(f1.uv, stored_f1.uv, "stored flows are ignored");
+    let cached = vadscope::flow::cache::read_cached_flow(&s, DisPreset::Ultrafast, 3)
+        .expect("read cache")
+        .expect("estimates go to the flow cache");
+    assert_eq!(cached.uv, f3.uv, "scoring reads what the cache holds");
 
     let mut fallback = FlowProvider::new(&s, FlowSource::StoredElseEstimated(DisPreset::Ultrafast));
     assert_eq!(

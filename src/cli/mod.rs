@@ -2,9 +2,13 @@
 //! subcommand turns its arguments into library calls and prints the result; errors are
 //! reported with their whole cause chain and a non-zero exit status.
 
+mod export;
+mod flow;
 mod generate;
 mod inspect;
 mod labels;
+mod render;
+mod score_cache;
 
 use std::process::ExitCode;
 
@@ -24,8 +28,14 @@ enum Command {
     Generate(generate::GenerateArgs),
     /// Validate a scenario or data set and print a summary.
     Inspect(inspect::InspectArgs),
+    /// Compute dense optical flow (DIS) for frames without it; evaluate it against stored flow.
+    Flow(flow::FlowArgs),
     /// Open, import, export or show a scenario's labels (crash-safe, undoable).
     Labels(labels::LabelsArgs),
+    /// Render views of a scenario's frames (dashboard, frame, pred, flow, timeline, roc) to PNG.
+    Render(render::RenderArgs),
+    /// Write annotated frames and scores.csv (with provenance) of a scenario.
+    Export(export::ExportArgs),
 }
 
 /// Parses the command line, runs the subcommand and maps its outcome to an exit status.
@@ -34,7 +44,10 @@ pub fn run() -> ExitCode {
     let outcome = match cli.command {
         Command::Generate(args) => generate::run(args),
         Command::Inspect(args) => inspect::run(args),
+        Command::Flow(args) => flow::run(args),
         Command::Labels(args) => labels::run(args),
+        Command::Render(args) => render::run(args),
+        Command::Export(args) => export::run(args),
     };
     match outcome {
         Ok(code) => code,

@@ -130,6 +130,44 @@ pub fn read_cached_flow(
     Ok(Some(read_kitti_png(&path)?))
 }
 
+/// The flow into frame `index` for `preset`: read from the cache when it holds the frame,
+/// else estimated with `dis` (which must be built from `preset`) and written to the cache,
+/// so scoring and `vadscope flow` share one set of files and get identical flows.
+pub fn cached_or_estimated_flow(
+    scenario: &Scenario,
+    preset: DisPreset,
+    dis: &DisFlow,
+    index: usize,
+) -> Result<FlowField, FlowError> {
+    let folder = flow_cache_folder(scenario, preset)?;
+    let path = cache_file(scenario, &folder, index)?;
+    if is_usable_cache_file(&path, scenario.resolution()) {
+        return Ok(read_kitti_png(&path)?);
+    }
+    let flow = estimate_pair(scenario, dis, index)?;
+    write_atomically(&path, &flow)?;
+    // Read back what was stored, so a flow is the same (KITTI's 1/64 px steps) whether it
+    // was just computed or found in the cache.
+    Ok(read_kitti_png(&path)?)
+}
+
+fn estimate_pair(scenario: &Scenario, dis: &DisFlow, index: usize) -> Result<FlowField, FlowError> {
+    if index == 0 {
+        return Err(FlowError::File {
+            path: scenario.root().to_path_buf(),
+            problem: "frame 0 has no previous frame to estimate flow from".into(),
+        });
+    }
+    let prev = scenario.rgb(index - 1)?;
+    let next = scenario.rgb(index)?;
+    dis.estimate(prev.as_ref(), next.as_ref(), None)
+        .map_err(|source| FlowError::Frame {
+            scenario: scenario.root().to_path_buf(),
+            index,
+            source: Box::new(source),
+        })
+}
+
 /// Whether `path` is a cache file of the scenario's frame size (header check only).
 fn is_usable_cache_file(path: &Path, size: (u32, u32)) -> bool {
     path.is_file() && probe_flow(path).is_ok_and(|dims| dims == size)
@@ -164,15 +202,7 @@ pub fn fill_flow_cache(
             let outcome = if is_usable_cache_file(&path, size) {
                 FrameOutcome::AlreadyCached
             } else {
-                let prev = scenario.rgb(index - 1)?;
-                let next = scenario.rgb(index)?;
-                let flow = dis
-                    .estimate(prev.as_ref(), next.as_ref(), None)
-                    .map_err(|source| FlowError::Frame {
-                        scenario: scenario.root().to_path_buf(),
-                        index,
-                        source: Box::new(source),
-                    })?;
+                let flow = estimate_pair(scenario, &dis, index)?;
                 write_atomically(&path, &flow)?;
                 computed.fetch_add(1, Ordering::Relaxed);
                 FrameOutcome::Computed

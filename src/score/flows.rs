@@ -2,15 +2,17 @@
 //! it ([`FlowProvider`]).
 //!
 //! Stored flows are the scenario's `OPTICAL_FLOW` files ([`Scenario::flow`]). Estimated
-//! flows are computed with [`DisFlow`] while scoring, from frame i−1 to frame i, seeded with
-//! the previous pair's flow, and kept only for the frames a cube still needs: the on-disk
-//! flow cache (`.vadscope/flow/<preset>/`) is not merged yet, so nothing is persisted.
+//! flows come from the scenario's DIS flow cache (`.vadscope/flow/<preset>/`, filled by
+//! `vadscope flow`), and frames the cache lacks are estimated with [`DisFlow`] from frame
+//! i−1 to frame i and written to it, so a second scoring run, the viewer and `vadscope
+//! flow` all read the same files. In memory only the frames a cube still needs are kept.
 
 use std::collections::HashMap;
 use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
+use crate::flow::cache::cached_or_estimated_flow;
 use crate::flow::{DisFlow, DisPreset, FlowField};
 use crate::sequence::Scenario;
 
@@ -90,19 +92,20 @@ impl<'a> FlowProvider<'a> {
         if stored.is_some() || index == 0 {
             return Ok(stored);
         }
-        let Some(estimator) = &self.estimator else {
+        let (
+            Some(estimator),
+            FlowSource::Estimated(preset) | FlowSource::StoredElseEstimated(preset),
+        ) = (&self.estimator, self.source)
+        else {
             return Ok(None);
         };
-        let prev = self.scenario.rgb(index - 1)?;
-        let next = self.scenario.rgb(index)?;
-        let prior = self.estimates.get(&(index - 1)).cloned();
-        let flow = estimator
-            .estimate(prev.as_ref(), next.as_ref(), prior.as_deref())
-            .map_err(|source| ScoreError::Flow {
+        let flow = cached_or_estimated_flow(self.scenario, preset, estimator, index).map_err(
+            |source| ScoreError::Flow {
                 scenario: self.scenario.root().to_path_buf(),
                 frame: index,
                 source,
-            })?;
+            },
+        )?;
         let flow = Arc::new(flow);
         self.estimates.insert(index, flow.clone());
         if self.estimates.len() > KEPT_ESTIMATES {

@@ -1,0 +1,117 @@
+//! `vadscope export`: writes every frame annotated (frame view: heatmap, boxes, truth
+//! contour, caption) and `scores.csv` with a provenance header, scoring first when the
+//! scenario has no current score cache.
+
+use std::ops::Range;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context;
+use clap::Args;
+use vadscope::render::{
+    self, Colormap, FrameScene, FrameViewInput, Provenance, ScoreSeries, scores_csv,
+};
+use vadscope::score::PixelReferenceMode;
+use vadscope::synth::parse_size;
+
+use super::render::{frames_in, open_scored, parse_frames, save_png, settings_of};
+use super::score_cache::ScoreArgs;
+
+/// Options of `vadscope export`.
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// The scenario folder.
+    scenario: PathBuf,
+    /// Folder to write `frames/` and `scores.csv` into (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Frames to write as images, START..END (END excluded) or one index (default: all);
+    /// `scores.csv` always has every frame.
+    #[arg(long, value_name = "START..END", value_parser = parse_frames)]
+    frames: Option<Range<usize>>,
+    /// Colormap of heatmaps and boxes: turbo, viridis, inferno or jet.
+    #[arg(long, default_value = "turbo")]
+    colormap: Colormap,
+    /// Scale the heatmap per frame (labelled) instead of the model's reference range.
+    #[arg(long)]
+    auto_range: bool,
+    /// Image size as WIDTHxHEIGHT (default: the frame 1:1 with caption and colour bar).
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// Write only `scores.csv`.
+    #[arg(long)]
+    no_frames: bool,
+    #[command(flatten)]
+    scores: ScoreArgs,
+}
+
+/// Runs `vadscope export`.
+pub fn run(args: ExportArgs) -> anyhow::Result<ExitCode> {
+    let (scenario, cache, model) = open_scored(&args.scenario, &args.scores)?;
+    let settings = settings_of(&args.scores, args.colormap, args.auto_range);
+    let table = cache.table();
+    let series = ScoreSeries::compute(
+        table,
+        &scenario.frame_labels().flags,
+        &settings.weights,
+        settings.median_kernel,
+    );
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let provenance = Provenance {
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        scenario: scenario.name().to_string(),
+        model: model.display().to_string(),
+        model_hash: table.meta.key.model.0,
+        boxes: table.meta.key.boxes.clone(),
+        flow: table.meta.key.flow.clone(),
+        weights: settings.weights,
+        median_kernel: settings.median_kernel,
+        threshold: settings.threshold,
+    };
+    let frames = if args.no_frames {
+        None
+    } else {
+        Some(frames_in(&scenario, args.frames.as_ref())?)
+    };
+    let csv_path = args.out.join("scores.csv");
+    std::fs::write(&csv_path, scores_csv(table, &series, &provenance))
+        .with_context(|| format!("cannot write {}", csv_path.display()))?;
+    let mut written = 1;
+    if let Some(frames) = frames {
+        let dir = args.out.join("frames");
+        std::fs::create_dir_all(&dir)
+            .with_context(|| format!("cannot create {}", dir.display()))?;
+        let options = settings.options(table).frame;
+        let name = scenario.name().to_string();
+        for index in frames {
+            let scene = FrameScene::load(
+                &scenario,
+                &cache,
+                index,
+                &settings.weights,
+                PixelReferenceMode::Training,
+                None,
+            )?;
+            let objects = scene.scene_objects();
+            let caption = scene.caption(&name, &series, &settings);
+            let input = FrameViewInput {
+                frame: &scene.frame,
+                objects: &objects,
+                heatmap: scene.heatmap.as_ref(),
+                anomaly_mask: scene.mask.as_deref(),
+                caption: Some(&caption),
+            };
+            let size = args
+                .size
+                .unwrap_or_else(|| render::natural_size(scene.frame.dimensions(), &options));
+            save_png(
+                &render::frame_view(&input, &options, size),
+                &dir.join(format!("frame_{index:05}.png")),
+            )?;
+            written += 1;
+        }
+    }
+    println!("wrote {written} files to {}", args.out.display());
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,323 @@
+//! `vadscope render`: writes the views of a scenario's frames as PNG files (and animated
+//! GIFs), scoring the scenario first when it has no current score cache.
+
+use std::fs::File;
+use std::io::BufWriter;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, bail};
+use clap::{Args, ValueEnum};
+use image::codecs::gif::{GifEncoder, Repeat};
+use image::{Delay, Frame, RgbaImage};
+use vadscope::render::{
+    self, Colormap, DashboardInput, FlowViewInput, FrameScene, FrameViewInput, PredViewInput,
+    ScoreLabels, ScoreSeries, TimelineOptions, ViewSettings,
+};
+use vadscope::score::{FlowProvider, FlowSource, PixelReferenceMode, ScoreCache};
+use vadscope::sequence::Scenario;
+use vadscope::synth::parse_size;
+
+use super::score_cache::{ScoreArgs, current_cache};
+
+/// Options of `vadscope render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// The scenario folder.
+    scenario: PathBuf,
+    /// Frames to render, as START..END (END excluded) or one index (default: all).
+    #[arg(long, value_name = "START..END", value_parser = parse_frames)]
+    frames: Option<Range<usize>>,
+    /// Views to write (comma-separated).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "dashboard")]
+    view: Vec<ViewArg>,
+    /// Colormap of heatmaps, error maps and boxes: turbo, viridis, inferno or jet.
+    #[arg(long, default_value = "turbo")]
+    colormap: Colormap,
+    /// Scale the heatmap per frame (labelled) instead of the model's reference range.
+    #[arg(long)]
+    auto_range: bool,
+    /// Image size as WIDTHxHEIGHT (default: per view).
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// Folder to write the images into (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write one animated GIF per frame view (10 frames/s).
+    #[arg(long)]
+    gif: bool,
+    #[command(flatten)]
+    scores: ScoreArgs,
+}
+
+/// The views `vadscope render` can write.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ViewArg {
+    /// Every view of one frame in one image.
+    Dashboard,
+    /// The frame with heatmap, boxes, truth contour and caption.
+    Frame,
+    /// Actual vs predicted frame and patches.
+    Pred,
+    /// Flow vs reconstruction.
+    Flow,
+    /// The score timeline of the scenario (one image).
+    Timeline,
+    /// ROC chart and score histogram of the scenario (one image each).
+    Roc,
+}
+
+impl ViewArg {
+    fn name(self) -> &'static str {
+        match self {
+            Self::Dashboard => "dashboard",
+            Self::Frame => "frame",
+            Self::Pred => "pred",
+            Self::Flow => "flow",
+            Self::Timeline => "timeline",
+            Self::Roc => "roc",
+        }
+    }
+
+    fn per_frame(self) -> bool {
+        matches!(
+            self,
+            Self::Dashboard | Self::Frame | Self::Pred | Self::Flow
+        )
+    }
+}
+
+/// Parses `A..B` (B excluded) or a single frame index `A`.
+pub fn parse_frames(text: &str) -> Result<Range<usize>, String> {
+    let bad =
+        |e: std::num::ParseIntError| format!("{text:?}: {e} (expected START..END or one index)");
+    match text.split_once("..") {
+        Some((a, b)) => {
+            let (a, b) = (
+                a.trim().parse::<usize>().map_err(bad)?,
+                b.trim().parse::<usize>().map_err(bad)?,
+            );
+            if b <= a {
+                return Err(format!("{text:?}: END must be greater than START"));
+            }
+            Ok(a..b)
+        }
+        None => {
+            let a = text.trim().parse::<usize>().map_err(bad)?;
+            Ok(a..a + 1)
+        }
+    }
+}
+
+/// The frames of `range` clipped to the scenario, with an error when nothing is left.
+pub fn frames_in(
+    scenario: &Scenario,
+    range: Option<&Range<usize>>,
+) -> anyhow::Result<Range<usize>> {
+    let n = scenario.len();
+    let frames = match range {
+        Some(r) => r.start.min(n)..r.end.min(n),
+        None => 0..n,
+    };
+    if frames.is_empty() {
+        bail!(
+            "{}: no frame in {:?} (the scenario has {n} frames)",
+            scenario.root().display(),
+            range.cloned().unwrap_or(0..0)
+        );
+    }
+    Ok(frames)
+}
+
+/// Writes `image` as PNG at `path`.
+pub fn save_png(image: &RgbaImage, path: &Path) -> anyhow::Result<()> {
+    image
+        .save(path)
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// The view settings of `args`.
+pub fn settings_of(scores: &ScoreArgs, colormap: Colormap, auto_range: bool) -> ViewSettings {
+    ViewSettings {
+        weights: scores.fusion_weights(),
+        threshold: scores.decision_threshold(),
+        colormap,
+        auto_range,
+        median_kernel: scores.median_kernel,
+    }
+}
+
+/// Opens the scenario and its current score cache (scoring first when needed).
+pub fn open_scored(
+    path: &Path,
+    scores: &ScoreArgs,
+) -> anyhow::Result<(Scenario, ScoreCache, PathBuf)> {
+    let scenario =
+        Scenario::open(path).with_context(|| format!("cannot open scenario {}", path.display()))?;
+    let (cache, model) = current_cache(&scenario, scores)?;
+    Ok((scenario, cache, model))
+}
+
+/// Runs `vadscope render`.
+pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
+    let (scenario, cache, _) = open_scored(&args.scenario, &args.scores)?;
+    let frames = frames_in(&scenario, args.frames.as_ref())?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let settings = settings_of(&args.scores, args.colormap, args.auto_range);
+    let table = cache.table();
+    let series = ScoreSeries::compute(
+        table,
+        &scenario.frame_labels().flags,
+        &settings.weights,
+        settings.median_kernel,
+    );
+    let mut options = settings.options(table);
+    let windowed = args.frames.is_some();
+    let evaluation = ScoreLabels {
+        scores: &series.filtered[series.skip..],
+        labels: &series.truth[series.skip..],
+        threshold: Some(settings.threshold),
+    };
+    let mut written = 0usize;
+
+    for view in args.view.iter().copied().filter(|v| !v.per_frame()) {
+        match view {
+            ViewArg::Timeline => {
+                let timeline_options = TimelineOptions {
+                    window: windowed.then(|| frames.clone()),
+                    ..TimelineOptions::default()
+                };
+                let input = series.timeline(&[], Some(settings.threshold), None);
+                let image =
+                    render::timeline(&input, &timeline_options, args.size.unwrap_or((1200, 360)));
+                save_png(&image, &args.out.join("timeline.png"))?;
+                written += 1;
+            }
+            _ => {
+                let size = args.size.unwrap_or((520, 420));
+                save_png(
+                    &render::roc_chart(&evaluation, size),
+                    &args.out.join("roc.png"),
+                )?;
+                save_png(
+                    &render::histogram(&evaluation, size),
+                    &args.out.join("histogram.png"),
+                )?;
+                written += 2;
+            }
+        }
+    }
+
+    let per_frame: Vec<ViewArg> = args
+        .view
+        .iter()
+        .copied()
+        .filter(|v| v.per_frame())
+        .collect();
+    if !per_frame.is_empty() {
+        let needs_flow = per_frame
+            .iter()
+            .any(|v| matches!(v, ViewArg::Dashboard | ViewArg::Flow));
+        let mut flows = FlowProvider::new(&scenario, FlowSource::default());
+        let mut animations: Vec<Vec<RgbaImage>> = vec![Vec::new(); per_frame.len()];
+        let name = scenario.name().to_string();
+        for index in frames.clone() {
+            let scene = FrameScene::load(
+                &scenario,
+                &cache,
+                index,
+                &settings.weights,
+                PixelReferenceMode::Training,
+                needs_flow.then_some(&mut flows),
+            )?;
+            let objects = scene.scene_objects();
+            let caption = scene.caption(&name, &series, &settings);
+            let frame_input = FrameViewInput {
+                frame: &scene.frame,
+                objects: &objects,
+                heatmap: scene.heatmap.as_ref(),
+                anomaly_mask: scene.mask.as_deref(),
+                caption: Some(&caption),
+            };
+            options.timeline.window = windowed.then(|| frames.clone());
+            let dims = scene.frame.dimensions();
+            for (k, view) in per_frame.iter().enumerate() {
+                let image = match view {
+                    ViewArg::Frame => {
+                        let size = args
+                            .size
+                            .unwrap_or_else(|| render::natural_size(dims, &options.frame));
+                        render::frame_view(&frame_input, &options.frame, size)
+                    }
+                    ViewArg::Pred => {
+                        let input = PredViewInput {
+                            frame: &scene.frame,
+                            objects: &objects,
+                        };
+                        render::pred_view(
+                            &input,
+                            &options.pred,
+                            args.size.unwrap_or((2 * dims.0, 2 * dims.1)),
+                        )
+                    }
+                    ViewArg::Flow => {
+                        let input = FlowViewInput {
+                            frame: &scene.frame,
+                            flow: scene.flow.as_deref(),
+                            objects: &objects,
+                        };
+                        render::flow_view(
+                            &input,
+                            &options.flow,
+                            args.size.unwrap_or((3 * dims.0, 2 * dims.1)),
+                        )
+                    }
+                    _ => {
+                        let input = DashboardInput {
+                            frame: frame_input,
+                            flow: scene.flow.as_deref(),
+                            timeline: series.timeline(&[], Some(settings.threshold), Some(index)),
+                            evaluation: Some(evaluation),
+                        };
+                        render::dashboard(&input, &options, args.size.unwrap_or((1600, 1000)))
+                    }
+                };
+                save_png(
+                    &image,
+                    &args.out.join(format!("{}_{index:05}.png", view.name())),
+                )?;
+                written += 1;
+                if args.gif {
+                    animations[k].push(image);
+                }
+            }
+        }
+        if args.gif {
+            for (view, images) in per_frame.iter().zip(animations) {
+                let path = args.out.join(format!("{}.gif", view.name()));
+                write_gif(&images, &path)?;
+                written += 1;
+            }
+        }
+    }
+    println!("wrote {written} files to {}", args.out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Writes `images` as an endlessly looping GIF at 10 frames/s.
+fn write_gif(images: &[RgbaImage], path: &Path) -> anyhow::Result<()> {
+    let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let mut encoder = GifEncoder::new_with_speed(BufWriter::new(file), 10);
+    encoder
+        .set_repeat(Repeat::Infinite)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    for image in images {
+        let frame = Frame::from_parts(image.clone(), 0, 0, Delay::from_numer_denom_ms(100, 1));
+        encoder
+            .encode_frame(frame)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    Ok(())
+}

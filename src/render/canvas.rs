@@ -1,0 +1,362 @@
+//! The drawing surface of every view: an opaque RGB raster with alpha-blended rectangles,
+//! lines, scaled image blits and text in the shipped DejaVu Sans font (no system fonts, so
+//! the same inputs give the same bytes everywhere). Charts draw on it through plotters'
+//! bitmap backend ([`Canvas::plotters`]).
+
+use std::sync::OnceLock;
+
+use image::{RgbImage, RgbaImage};
+use plotters::backend::BitMapBackend;
+use plotters::prelude::{FontStyle, IntoFont};
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+/// The font every view writes with.
+const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+/// Font family name under which [`FONT`] is registered with plotters.
+pub(crate) const FAMILY: &str = "sans-serif";
+
+/// Registers the shipped font with plotters (once per process).
+pub(crate) fn ensure_font() {
+    static REGISTERED: OnceLock<()> = OnceLock::new();
+    REGISTERED.get_or_init(|| {
+        // The font is compiled in and known to parse; a failure would leave text blank,
+        // never crash a render.
+        let _ = plotters::style::register_font(FAMILY, FontStyle::Normal, FONT);
+    });
+}
+
+/// Where a text's anchor point lies on the text.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Anchor {
+    /// Anchor at the top-left corner.
+    TopLeft,
+    /// Anchor at the middle of the top edge.
+    TopCenter,
+    /// Anchor at the top-right corner.
+    TopRight,
+    /// Anchor at the middle of the left edge.
+    MiddleLeft,
+    /// Anchor at the middle of the right edge.
+    MiddleRight,
+    /// Anchor at the centre.
+    Center,
+}
+
+impl Anchor {
+    fn pos(self) -> Pos {
+        match self {
+            Self::TopLeft => Pos::new(HPos::Left, VPos::Top),
+            Self::TopCenter => Pos::new(HPos::Center, VPos::Top),
+            Self::TopRight => Pos::new(HPos::Right, VPos::Top),
+            Self::MiddleLeft => Pos::new(HPos::Left, VPos::Center),
+            Self::MiddleRight => Pos::new(HPos::Right, VPos::Center),
+            Self::Center => Pos::new(HPos::Center, VPos::Center),
+        }
+    }
+}
+
+/// An RGB raster, row-major, 3 bytes per pixel.
+pub(crate) struct Canvas {
+    width: u32,
+    height: u32,
+    pixels: Vec<u8>,
+}
+
+impl Canvas {
+    /// A canvas of `width`×`height` (at least 1×1) filled with `background`.
+    pub(crate) fn new(width: u32, height: u32, background: [u8; 3]) -> Self {
+        let (width, height) = (width.max(1), height.max(1));
+        let mut pixels = Vec::with_capacity(3 * width as usize * height as usize);
+        for _ in 0..width as usize * height as usize {
+            pixels.extend_from_slice(&background);
+        }
+        Self {
+            width,
+            height,
+            pixels,
+        }
+    }
+
+    /// Width in pixels.
+    pub(crate) fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub(crate) fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// The finished image, fully opaque.
+    pub(crate) fn into_rgba(self) -> RgbaImage {
+        let mut out = Vec::with_capacity(4 * self.width as usize * self.height as usize);
+        for px in self.pixels.chunks_exact(3) {
+            out.extend_from_slice(&[px[0], px[1], px[2], 255]);
+        }
+        RgbaImage::from_raw(self.width, self.height, out).expect("buffer matches its size")
+    }
+
+    /// Pixel (x, y), or `None` outside.
+    pub(crate) fn get(&self, x: i32, y: i32) -> Option<[u8; 3]> {
+        self.offset(x, y)
+            .map(|o| [self.pixels[o], self.pixels[o + 1], self.pixels[o + 2]])
+    }
+
+    fn offset(&self, x: i32, y: i32) -> Option<usize> {
+        (x >= 0 && y >= 0 && (x as u32) < self.width && (y as u32) < self.height)
+            .then(|| 3 * (y as usize * self.width as usize + x as usize))
+    }
+
+    /// Sets pixel (x, y); outside pixels are ignored.
+    pub(crate) fn put(&mut self, x: i32, y: i32, color: [u8; 3]) {
+        if let Some(o) = self.offset(x, y) {
+            self.pixels[o..o + 3].copy_from_slice(&color);
+        }
+    }
+
+    /// Blends `color` over pixel (x, y) with opacity `alpha` in [0, 1].
+    pub(crate) fn blend(&mut self, x: i32, y: i32, color: [u8; 3], alpha: f32) {
+        if let Some(o) = self.offset(x, y) {
+            blend_into(&mut self.pixels[o..o + 3], color, alpha);
+        }
+    }
+
+    /// Row `y`, columns `x0..x1`, clipped to the canvas; empty outside.
+    fn row_span(&mut self, y: i32, x0: i32, x1: i32) -> &mut [u8] {
+        if y < 0 || y as u32 >= self.height {
+            return &mut [];
+        }
+        let x0 = x0.clamp(0, self.width as i32) as usize;
+        let x1 = x1.clamp(0, self.width as i32) as usize;
+        let row = 3 * y as usize * self.width as usize;
+        if x1 <= x0 {
+            return &mut [];
+        }
+        &mut self.pixels[row + 3 * x0..row + 3 * x1]
+    }
+
+    /// Fills columns `x0..x1`, rows `y0..y1` with `color` at opacity `alpha`.
+    pub(crate) fn fill_rect(
+        &mut self,
+        x0: i32,
+        y0: i32,
+        x1: i32,
+        y1: i32,
+        color: [u8; 3],
+        alpha: f32,
+    ) {
+        for y in y0.max(0)..y1.min(self.height as i32) {
+            let span = self.row_span(y, x0, x1);
+            if alpha >= 1.0 {
+                for px in span.chunks_exact_mut(3) {
+                    px.copy_from_slice(&color);
+                }
+            } else {
+                for px in span.chunks_exact_mut(3) {
+                    blend_into(px, color, alpha);
+                }
+            }
+        }
+    }
+
+    /// Draws the outline of columns `x0..x1`, rows `y0..y1`, `thickness` pixels inwards.
+    pub(crate) fn outline_rect(
+        &mut self,
+        x0: i32,
+        y0: i32,
+        x1: i32,
+        y1: i32,
+        color: [u8; 3],
+        thickness: i32,
+    ) {
+        let t = thickness.max(1);
+        self.fill_rect(x0, y0, x1, (y0 + t).min(y1), color, 1.0);
+        self.fill_rect(x0, (y1 - t).max(y0), x1, y1, color, 1.0);
+        self.fill_rect(x0, y0, (x0 + t).min(x1), y1, color, 1.0);
+        self.fill_rect((x1 - t).max(x0), y0, x1, y1, color, 1.0);
+    }
+
+    /// A straight line from (x0, y0) to (x1, y1), both ends included (Bresenham).
+    pub(crate) fn line(&mut self, x0: i32, y0: i32, x1: i32, y1: i32, color: [u8; 3]) {
+        let (dx, dy) = ((x1 - x0).abs(), -(y1 - y0).abs());
+        let (sx, sy) = (if x0 < x1 { 1 } else { -1 }, if y0 < y1 { 1 } else { -1 });
+        let (mut x, mut y, mut err) = (x0, y0, dx + dy);
+        // A line is at most as long as the canvas allows; clip the walk to stay bounded.
+        let limit = 4 * (self.width + self.height) as i64 + (dx - dy) as i64;
+        for _ in 0..=limit {
+            self.put(x, y, color);
+            if x == x1 && y == y1 {
+                break;
+            }
+            let e2 = 2 * err;
+            if e2 >= dy {
+                err += dy;
+                x += sx;
+            }
+            if e2 <= dx {
+                err += dx;
+                y += sy;
+            }
+        }
+    }
+
+    /// Draws `image` scaled (bilinear) into columns `x..x+w`, rows `y..y+h`.
+    pub(crate) fn blit_scaled(&mut self, image: &RgbImage, x: i32, y: i32, w: u32, h: u32) {
+        if image.width() == 0 || image.height() == 0 || w == 0 || h == 0 {
+            return;
+        }
+        let xs = sample_taps(image.width(), w);
+        let ys = sample_taps(image.height(), h);
+        let src = image.as_raw();
+        let stride = 3 * image.width() as usize;
+        for (row, &(y0, y1, fy)) in ys.iter().enumerate() {
+            let ty = y + row as i32;
+            if ty < 0 || ty as u32 >= self.height {
+                continue;
+            }
+            for (col, &(x0, x1, fx)) in xs.iter().enumerate() {
+                let tx = x + col as i32;
+                let Some(o) = self.offset(tx, ty) else {
+                    continue;
+                };
+                for c in 0..3 {
+                    let at = |yy: usize, xx: usize| f32::from(src[yy * stride + 3 * xx + c]);
+                    let top = at(y0, x0) * (1.0 - fx) + at(y0, x1) * fx;
+                    let bottom = at(y1, x0) * (1.0 - fx) + at(y1, x1) * fx;
+                    self.pixels[o + c] = (top * (1.0 - fy) + bottom * fy).round() as u8;
+                }
+            }
+        }
+    }
+
+    /// Draws `image` scaled with nearest-neighbour sampling (crisp patch pixels) into
+    /// columns `x..x+w`, rows `y..y+h`.
+    pub(crate) fn blit_scaled_nearest(&mut self, image: &RgbImage, x: i32, y: i32, w: u32, h: u32) {
+        if image.width() == 0 || image.height() == 0 {
+            return;
+        }
+        for row in 0..h {
+            let sy = (u64::from(row) * u64::from(image.height()) / u64::from(h)) as u32;
+            for col in 0..w {
+                let sx = (u64::from(col) * u64::from(image.width()) / u64::from(w)) as u32;
+                self.put(x + col as i32, y + row as i32, image.get_pixel(sx, sy).0);
+            }
+        }
+    }
+
+    /// Copies `other` with its top-left corner at (x, y), clipped.
+    pub(crate) fn paste(&mut self, other: &Canvas, x: i32, y: i32) {
+        for row in 0..other.height as i32 {
+            let src_row = 3 * row as usize * other.width as usize;
+            let x0 = x.max(0);
+            let x1 = (x + other.width as i32).min(self.width as i32);
+            if x1 <= x0 {
+                return;
+            }
+            let span = self.row_span(y + row, x0, x1);
+            if span.is_empty() {
+                continue;
+            }
+            let from = src_row + 3 * (x0 - x) as usize;
+            span.copy_from_slice(&other.pixels[from..from + span.len()]);
+        }
+    }
+
+    /// Width and height of `text` at `size` pixels.
+    pub(crate) fn text_size(text: &str, size: f64) -> (u32, u32) {
+        ensure_font();
+        match (FAMILY, size).into_font().layout_box(text) {
+            Ok(((x0, y0), (x1, y1))) => ((x1 - x0).max(0) as u32, (y1 - y0).max(0) as u32),
+            Err(_) => (0, 0),
+        }
+    }
+
+    /// Draws `text` at `size` pixels with its `anchor` at (x, y); clipped to the canvas.
+    pub(crate) fn text(
+        &mut self,
+        x: i32,
+        y: i32,
+        text: &str,
+        size: f64,
+        color: [u8; 3],
+        anchor: Anchor,
+    ) {
+        ensure_font();
+        if text.is_empty() || size < 1.0 {
+            return;
+        }
+        let font = (FAMILY, size).into_font();
+        let Ok(((min_x, min_y), (max_x, max_y))) = font.layout_box(text) else {
+            return;
+        };
+        let (w, h) = (max_x - min_x, max_y - min_y);
+        let pos = anchor.pos();
+        let dx = match pos.h_pos {
+            HPos::Left => 0,
+            HPos::Center => -w / 2,
+            HPos::Right => -w,
+        };
+        let dy = match pos.v_pos {
+            VPos::Top => 0,
+            VPos::Center => -h / 2,
+            VPos::Bottom => -h,
+        };
+        let _ = font.draw(text, (0, 0), |px, py, alpha| {
+            self.blend(x + px + dx - min_x, y + py + dy - min_y, color, alpha);
+            Ok::<(), ()>(())
+        });
+    }
+
+    /// Draws `text` on a translucent dark plate (for labels over images).
+    pub(crate) fn label(
+        &mut self,
+        x: i32,
+        y: i32,
+        text: &str,
+        size: f64,
+        color: [u8; 3],
+        plate: [u8; 3],
+    ) {
+        let (w, h) = Self::text_size(text, size);
+        let pad = (size / 5.0).ceil() as i32;
+        self.fill_rect(
+            x,
+            y,
+            x + w as i32 + 2 * pad,
+            y + h as i32 + 2 * pad,
+            plate,
+            0.8,
+        );
+        self.text(x + pad, y + pad, text, size, color, Anchor::TopLeft);
+    }
+
+    /// plotters' bitmap backend over this canvas, for charts.
+    pub(crate) fn plotters(&mut self) -> BitMapBackend<'_> {
+        ensure_font();
+        BitMapBackend::with_buffer(&mut self.pixels, (self.width, self.height))
+    }
+}
+
+/// Blends `color` over the RGB pixel `px` with opacity `alpha`.
+fn blend_into(px: &mut [u8], color: [u8; 3], alpha: f32) {
+    let a = alpha.clamp(0.0, 1.0);
+    for c in 0..3 {
+        let v = f32::from(px[c]) * (1.0 - a) + f32::from(color[c]) * a;
+        px[c] = v.round() as u8;
+    }
+}
+
+/// Bilinear source taps (left, right, weight of right) for `out` samples of `len` source
+/// pixels, half-pixel centres, clamped at the edges.
+pub(crate) fn sample_taps(len: u32, out: u32) -> Vec<(usize, usize, f32)> {
+    let scale = len as f32 / out.max(1) as f32;
+    (0..out)
+        .map(|d| {
+            let f = ((d as f32 + 0.5) * scale - 0.5).max(0.0);
+            let i = (f.floor() as usize).min(len as usize - 1);
+            let j = (i + 1).min(len as usize - 1);
+            (i, j, f - i as f32)
+        })
+        .collect()
+}

@@ -1,0 +1,79 @@
+//! The per-object gallery shared by the prediction and flow views: for each object a row
+//! of equally sized tiles (e.g. actual, model output, error) under column titles, laid out
+//! in as many rows and columns as make the tiles largest.
+
+use image::RgbImage;
+
+use super::canvas::{Anchor, Canvas};
+use super::legend::LEGEND_TEXT;
+
+/// One object's tiles and its label.
+pub(crate) struct GalleryItem {
+    /// Label above the tiles ("#3 score 12.1").
+    pub label: String,
+    /// The tiles, drawn left to right.
+    pub tiles: Vec<RgbImage>,
+}
+
+/// Largest tile side drawn (6× a 32-pixel patch).
+const MAX_TILE: u32 = 192;
+
+/// Draws `items` into the rectangle (x, y, w, h), tile columns titled `titles`; says so
+/// when there is no object.
+pub(crate) fn draw_gallery(
+    canvas: &mut Canvas,
+    (x, y, w, h): (i32, i32, u32, u32),
+    items: &[GalleryItem],
+    titles: &[&str],
+    empty_message: &str,
+) {
+    let font = (f64::from(h) / 14.0).clamp(8.0, 13.0);
+    let line = Canvas::text_size("Ag", font).1 + 4;
+    if items.is_empty() {
+        canvas.text(
+            x + w as i32 / 2,
+            y + h as i32 / 2,
+            empty_message,
+            font,
+            LEGEND_TEXT,
+            Anchor::Center,
+        );
+        return;
+    }
+    let per = titles.len().max(1) as u32;
+    let gap = 4u32;
+    let n = items.len() as u32;
+    let mut best = (0u32, 1u32);
+    for rows in 1..=n {
+        let cols = n.div_ceil(rows);
+        let by_w = (w.saturating_sub(cols * 2 * gap) / cols.max(1)).saturating_sub(per * gap) / per;
+        let by_h = (h.saturating_sub(line) / rows).saturating_sub(line + gap);
+        let tile = by_w.min(by_h).min(MAX_TILE);
+        if tile > best.0 {
+            best = (tile, rows);
+        }
+    }
+    let (tile, rows) = best;
+    if tile < 4 {
+        return;
+    }
+    let cols = n.div_ceil(rows);
+    let group_w = per * (tile + gap) + 2 * gap;
+    let row_h = line + tile + gap;
+    for (k, item) in items.iter().enumerate() {
+        let (r, c) = (k as u32 / cols, k as u32 % cols);
+        let gx = x + (c * group_w) as i32 + gap as i32;
+        let gy = y + line as i32 + (r * row_h) as i32;
+        if r == 0 {
+            for (t, title) in titles.iter().enumerate() {
+                let tx = gx + (t as u32 * (tile + gap) + tile / 2) as i32;
+                canvas.text(tx, y, title, font, LEGEND_TEXT, Anchor::TopCenter);
+            }
+        }
+        canvas.text(gx, gy, &item.label, font, LEGEND_TEXT, Anchor::TopLeft);
+        for (t, image) in item.tiles.iter().enumerate() {
+            let tx = gx + (t as u32 * (tile + gap)) as i32;
+            canvas.blit_scaled_nearest(image, tx, gy + line as i32, tile, tile);
+        }
+    }
+}

@@ -1,0 +1,51 @@
+//! Every view as an RGBA image: the GUI shows these as textures and `vadscope render` /
+//! `vadscope export` write them to files, so both show the same pixels. Inputs are plain
+//! borrowed data plus an options struct with `Default`; drawing never fails and the same
+//! inputs give the same bytes (the font is shipped, nothing depends on time or threads).
+//!
+//! Views:
+//! - [`frame_view`]: the frame with heatmap ([`HeatRange`], [`Colormap`]), score-coloured
+//!   boxes ([`SceneObject`], [`ScoreScale`]), ground-truth contour and [`Caption`] strip.
+//! - [`pred_view`]: actual vs predicted frame and the per-object patch gallery.
+//! - [`flow_view`]: flow, its reconstruction and the error, full frame and per object.
+//! - [`timeline`]: the score series over frames with lanes and cursor; [`TimelineLayout`]
+//!   maps pixels to frames for hit-testing.
+//! - [`roc_chart`], [`histogram`]: evaluation charts of [`ScoreLabels`].
+//! - [`dashboard`]: all of them for one frame.
+//!
+//! Data: [`ScoreSeries`] and [`FrameScene`] gather the inputs from a scenario and its
+//! score cache; [`scores_csv`] writes an export's score table with its [`Provenance`].
+
+mod canvas;
+pub mod charts;
+pub mod colormap;
+pub mod dashboard;
+mod error;
+pub mod export;
+pub mod flow_view;
+pub mod frame_view;
+mod gallery;
+mod legend;
+pub mod overlay;
+mod patches;
+pub mod pred_view;
+pub mod scene;
+pub mod timeline;
+
+pub use charts::{ScoreLabels, histogram, roc_chart};
+pub use colormap::{Colormap, UnknownColormap};
+pub use dashboard::{DashboardInput, DashboardOptions, dashboard};
+pub use error::RenderError;
+pub use export::{Provenance, SCORES_HEADER, scores_csv};
+pub use flow_view::{FlowViewInput, FlowViewOptions, flow_view};
+pub use frame_view::{
+    Caption, FrameViewInput, FrameViewOptions, HeatRange, MASK_COLOR, REFERENCE_RANGE_IQR,
+    frame_view, natural_size,
+};
+pub use overlay::{SceneObject, ScoreScale};
+pub use pred_view::{PredViewInput, PredViewOptions, pred_view};
+pub use scene::{
+    FrameScene, REFERENCE_THRESHOLD_SIGMA, ScoreSeries, ViewSettings, reference_error_range,
+    reference_threshold,
+};
+pub use timeline::{TimelineInput, TimelineLayout, TimelineOptions, timeline};

@@ -1,0 +1,318 @@
+//! What the views show, gathered from a scenario and its score cache: the score series of
+//! the whole scenario ([`ScoreSeries`]: fused, filtered, z-scores, truth) and everything of
+//! one frame ([`FrameScene`]: image, scored objects and their maps, heatmap, mask, flow).
+//! The headless commands and the viewer build their view inputs from these.
+
+use std::sync::Arc;
+
+use image::{GrayImage, RgbImage};
+
+use crate::eval::median_filter;
+use crate::score::{
+    FlowProvider, FrameFusion, FusionWeights, Heatmap, HeatmapScratch, ObjectMaps, ObjectScore,
+    PixelReferenceMode, ScoreCache, ScoreTable, compose_heatmap, frame_scores,
+};
+use crate::sequence::{FlowField, FrameId, Scenario};
+
+use super::colormap::Colormap;
+use super::dashboard::DashboardOptions;
+use super::error::RenderError;
+use super::frame_view::{Caption, HeatRange, REFERENCE_RANGE_IQR};
+use super::overlay::{SceneObject, ScoreScale};
+use super::timeline::TimelineInput;
+use crate::model::PixelStats;
+
+/// Training standard deviations above the mean, in both errors, of the object whose fused
+/// score is the default threshold ([`reference_threshold`]).
+pub const REFERENCE_THRESHOLD_SIGMA: f64 = 3.0;
+
+/// The default decision threshold on the (filtered) frame score for `weights`: the fused
+/// score of an object whose S_r and S_p both lie [`REFERENCE_THRESHOLD_SIGMA`] training
+/// standard deviations above their training means. It needs no labels.
+pub fn reference_threshold(weights: &FusionWeights) -> f64 {
+    REFERENCE_THRESHOLD_SIGMA * (weights.w_r + weights.w_p)
+}
+
+/// The per-frame score series of one scenario.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScoreSeries {
+    /// Raw fused frame score per frame.
+    pub fused: Vec<f64>,
+    /// The metric input: the first `skip` frames NaN (left out), the rest median-filtered.
+    pub filtered: Vec<f64>,
+    /// z(S_r) of each frame's top object (NaN without objects).
+    pub z_r: Vec<f64>,
+    /// z(S_p) of each frame's top object (NaN without objects).
+    pub z_p: Vec<f64>,
+    /// Index into [`ScoreTable::objects`] of each frame's top object.
+    pub top_object: Vec<Option<usize>>,
+    /// Ground truth per frame (false beyond the scenario's labels).
+    pub truth: Vec<bool>,
+    /// Frames left out at the start (the model's `clip_hist`).
+    pub skip: usize,
+}
+
+impl ScoreSeries {
+    /// The series of `table` for `weights`, filtered with `median_kernel` after the first
+    /// `clip_hist` frames as the metrics do; `truth` holds the ground-truth flags.
+    pub fn compute(
+        table: &ScoreTable,
+        truth: &[bool],
+        weights: &FusionWeights,
+        median_kernel: usize,
+    ) -> Self {
+        let fused = frame_scores(table, weights);
+        let n = fused.len();
+        let skip = (table.meta.clip_hist as usize).min(n);
+        let mut filtered = vec![f64::NAN; skip];
+        filtered.extend(median_filter(&fused[skip..], median_kernel));
+        let fusion = FrameFusion::new(&table.meta.training, weights);
+        let stats = &table.meta.training;
+        let mut z_r = vec![f64::NAN; n];
+        let mut z_p = vec![f64::NAN; n];
+        let mut top_object = vec![None; n];
+        for i in 0..n {
+            let first = table.frames[i].first_object as usize;
+            let best = table
+                .frame_objects(i)
+                .iter()
+                .enumerate()
+                .map(|(k, o)| (k, fusion.object_score(o.s_r, o.s_p)))
+                .fold(None, |best: Option<(usize, f64)>, cur| match best {
+                    Some(b) if b.1 >= cur.1 => Some(b),
+                    _ => Some(cur),
+                });
+            if let Some((k, _)) = best {
+                let o = &table.objects[first + k];
+                z_r[i] = stats.flow_score.z(f64::from(o.s_r));
+                z_p[i] = stats.frame_score.z(f64::from(o.s_p));
+                top_object[i] = Some(first + k);
+            }
+        }
+        let truth = (0..n)
+            .map(|i| truth.get(i).copied().unwrap_or(false))
+            .collect();
+        Self {
+            fused,
+            filtered,
+            z_r,
+            z_p,
+            top_object,
+            truth,
+            skip,
+        }
+    }
+
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.fused.len()
+    }
+
+    /// Whether there is no frame.
+    pub fn is_empty(&self) -> bool {
+        self.fused.is_empty()
+    }
+
+    /// The timeline input of these series with `threshold` and the cursor on `cursor`.
+    pub fn timeline<'a>(
+        &'a self,
+        labels: &'a [Option<bool>],
+        threshold: Option<f64>,
+        cursor: Option<usize>,
+    ) -> TimelineInput<'a> {
+        TimelineInput {
+            fused: &self.fused,
+            filtered: &self.filtered,
+            z_r: &self.z_r,
+            z_p: &self.z_p,
+            truth: &self.truth,
+            labels,
+            threshold,
+            cursor,
+        }
+    }
+}
+
+/// Everything the views show of one frame.
+#[derive(Debug, Clone)]
+pub struct FrameScene {
+    /// Frame index.
+    pub index: usize,
+    /// AnoVox frame id.
+    pub frame_id: Option<FrameId>,
+    /// The camera frame.
+    pub frame: Arc<RgbImage>,
+    /// Its scored objects.
+    pub objects: Vec<ObjectScore>,
+    /// Fused score of each object.
+    pub scores: Vec<f64>,
+    /// The maps of each object.
+    pub maps: Vec<ObjectMaps>,
+    /// The full-resolution pixel heatmap (`None` without scored objects).
+    pub heatmap: Option<Heatmap>,
+    /// The ground-truth anomaly mask.
+    pub mask: Option<Arc<GrayImage>>,
+    /// The flow leading into the frame.
+    pub flow: Option<Arc<FlowField>>,
+}
+
+impl FrameScene {
+    /// Gathers frame `index` of `scenario` scored in `cache`, fused with `weights`, pixel
+    /// maps scaled by `mode`, flow from `flows` (none when `None`).
+    pub fn load(
+        scenario: &Scenario,
+        cache: &ScoreCache,
+        index: usize,
+        weights: &FusionWeights,
+        mode: PixelReferenceMode,
+        flows: Option<&mut FlowProvider<'_>>,
+    ) -> Result<Self, RenderError> {
+        if index >= scenario.len() {
+            return Err(RenderError::NoSuchFrame {
+                scenario: scenario.name().to_string(),
+                index,
+                frames: scenario.len(),
+            });
+        }
+        let table = cache.table();
+        let frame = scenario.rgb(index)?;
+        let objects = table.frame_objects(index).to_vec();
+        let maps = if objects.is_empty() {
+            Vec::new()
+        } else {
+            cache.frame_maps(index)?
+        };
+        let fusion = FrameFusion::new(&table.meta.training, weights);
+        let scores = objects
+            .iter()
+            .map(|o| fusion.object_score(o.s_r, o.s_p))
+            .collect();
+        let heatmap = if objects.is_empty() {
+            None
+        } else {
+            let (w, h) = frame.dimensions();
+            let mut heat = Heatmap::new(w, h);
+            compose_heatmap(
+                table,
+                index,
+                &maps,
+                weights,
+                mode,
+                &mut heat,
+                &mut HeatmapScratch::default(),
+            )?;
+            Some(heat)
+        };
+        let flow = match flows {
+            Some(provider) => provider.flow(index)?,
+            None => None,
+        };
+        Ok(Self {
+            index,
+            frame_id: scenario.frame_id(index),
+            frame,
+            objects,
+            scores,
+            maps,
+            heatmap,
+            mask: scenario.anomaly_mask(index)?,
+            flow,
+        })
+    }
+
+    /// The caption of this frame in `scenario` with `settings`.
+    pub fn caption(
+        &self,
+        scenario: &str,
+        series: &ScoreSeries,
+        settings: &ViewSettings,
+    ) -> Caption {
+        let score = series
+            .filtered
+            .get(self.index)
+            .copied()
+            .filter(|v| v.is_finite())
+            .or_else(|| series.fused.get(self.index).copied());
+        Caption {
+            scenario: scenario.to_string(),
+            index: self.index,
+            frame_id: self.frame_id.map(|id| id.0),
+            frame_score: score,
+            threshold: Some(settings.threshold),
+            weights: Some(settings.weights),
+            truth: series.truth.get(self.index).copied(),
+        }
+    }
+
+    /// The objects as the views take them.
+    pub fn scene_objects(&self) -> Vec<SceneObject<'_>> {
+        self.objects
+            .iter()
+            .enumerate()
+            .map(|(k, o)| SceneObject {
+                bbox: o.bbox,
+                track_id: o.track_id,
+                score: self.scores.get(k).copied(),
+                maps: self.maps.get(k),
+            })
+            .collect()
+    }
+}
+
+/// The analyst's choices that every view of a scenario shares.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ViewSettings {
+    /// Fusion weights.
+    pub weights: FusionWeights,
+    /// Decision threshold on the filtered frame score.
+    pub threshold: f64,
+    /// Colormap of heatmaps, error maps and boxes.
+    pub colormap: Colormap,
+    /// Heatmap range per frame instead of the model's reference range.
+    pub auto_range: bool,
+    /// Median-filter kernel of the filtered score.
+    pub median_kernel: usize,
+}
+
+impl Default for ViewSettings {
+    fn default() -> Self {
+        let weights = FusionWeights::default();
+        Self {
+            weights,
+            threshold: reference_threshold(&weights),
+            colormap: Colormap::default(),
+            auto_range: false,
+            median_kernel: 17,
+        }
+    }
+}
+
+/// The error range of the reference statistics `p`: 0 to [`REFERENCE_RANGE_IQR`] IQRs
+/// above the median (`None` when that is not positive).
+pub fn reference_error_range(p: &PixelStats) -> Option<(f32, f32)> {
+    let high = (p.median + f64::from(REFERENCE_RANGE_IQR) * p.iqr) as f32;
+    (high.is_finite() && high > 0.0).then_some((0.0, high))
+}
+
+impl ViewSettings {
+    /// The options of every view for scores of `table` (ranges from its model's training
+    /// statistics).
+    pub fn options(&self, table: &ScoreTable) -> DashboardOptions {
+        let mut options = DashboardOptions::default();
+        let scale = ScoreScale::around(self.threshold);
+        options.frame.colormap = self.colormap;
+        options.frame.range = if self.auto_range {
+            HeatRange::AutoPerFrame
+        } else {
+            HeatRange::reference(&self.weights)
+        };
+        options.frame.box_scale = scale;
+        options.pred.colormap = self.colormap;
+        options.pred.box_scale = scale;
+        options.pred.error_range = reference_error_range(&table.meta.training.frame_pixel);
+        options.flow.colormap = self.colormap;
+        options.flow.box_scale = scale;
+        options.flow.error_range = reference_error_range(&table.meta.training.flow_pixel);
+        options
+    }
+}

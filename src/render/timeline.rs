@@ -1,0 +1,572 @@
+//! The timeline chart: fused frame score (raw and median-filtered) with the threshold, the
+//! z-scores of S_r and S_p of each frame's top object, the ground-truth anomaly intervals
+//! and the analyst's labels as lanes, and the cursor. Any number of frames: each pixel
+//! column draws the min/max of the frames it covers, so 100,000 frames cost one pass.
+//!
+//! [`TimelineLayout`] is the chart's pixel ↔ frame mapping, for hit-testing clicks.
+
+use std::ops::Range;
+
+use image::RgbaImage;
+use plotters::prelude::*;
+
+use super::canvas::{Anchor, Canvas, FAMILY};
+use super::frame_view::BACKGROUND;
+use super::legend::{LEGEND_TEXT, short_number};
+
+/// The series of one timeline, one value per frame index; slices may be empty (not drawn).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct TimelineInput<'a> {
+    /// Raw fused frame scores (NaN = not scored).
+    pub fused: &'a [f64],
+    /// Median-filtered fused frame scores.
+    pub filtered: &'a [f64],
+    /// z-score of S_r (flow reconstruction) of each frame's top object (NaN = none).
+    pub z_r: &'a [f64],
+    /// z-score of S_p (frame prediction) of each frame's top object (NaN = none).
+    pub z_p: &'a [f64],
+    /// Ground truth: anomalous frames.
+    pub truth: &'a [bool],
+    /// The analyst's labels (`None` = not labelled).
+    pub labels: &'a [Option<bool>],
+    /// Decision threshold on the filtered score.
+    pub threshold: Option<f64>,
+    /// The current frame.
+    pub cursor: Option<usize>,
+}
+
+impl TimelineInput<'_> {
+    /// Number of frames: the longest series.
+    pub fn frames(&self) -> usize {
+        [
+            self.fused.len(),
+            self.filtered.len(),
+            self.z_r.len(),
+            self.z_p.len(),
+            self.truth.len(),
+            self.labels.len(),
+        ]
+        .into_iter()
+        .max()
+        .unwrap_or(0)
+    }
+}
+
+/// What the timeline shows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TimelineOptions {
+    /// Visible frames (zoom); `None` = all.
+    pub window: Option<Range<usize>>,
+    /// Draw the raw fused score.
+    pub raw: bool,
+    /// Draw the filtered fused score.
+    pub filtered: bool,
+    /// Draw the panel of the z-scores of S_r and S_p.
+    pub components: bool,
+}
+
+impl Default for TimelineOptions {
+    fn default() -> Self {
+        Self {
+            window: None,
+            raw: true,
+            filtered: true,
+            components: true,
+        }
+    }
+}
+
+/// Colour of the raw fused score.
+const RAW: [u8; 3] = [120, 150, 200];
+/// Colour of the filtered fused score.
+const FILTERED: [u8; 3] = [255, 255, 255];
+/// Colour of the threshold line.
+const THRESHOLD: [u8; 3] = [255, 80, 60];
+/// Colour of z(S_r).
+const Z_R: [u8; 3] = [80, 200, 255];
+/// Colour of z(S_p).
+const Z_P: [u8; 3] = [255, 190, 60];
+/// Colour of ground-truth anomalies (lane and shading).
+const TRUTH: [u8; 3] = [230, 60, 60];
+/// Colour of analyst "anomaly" labels.
+const LABEL_ANOMALY: [u8; 3] = [255, 150, 40];
+/// Colour of analyst "normal" labels.
+const LABEL_NORMAL: [u8; 3] = [70, 170, 90];
+/// Colour of the cursor.
+const CURSOR: [u8; 3] = [255, 240, 100];
+
+/// Where the parts of a timeline lie, and the pixel ↔ frame mapping.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TimelineLayout {
+    /// Image size.
+    pub size: (u32, u32),
+    /// Visible frames.
+    pub frames: Range<usize>,
+    /// Plot columns `x0..x1` (the same for every panel).
+    pub plot_x: Range<i32>,
+    /// Rows of the fused-score panel.
+    pub score_y: Range<i32>,
+    /// Rows of the z-score panel (empty when not shown).
+    pub components_y: Range<i32>,
+    /// Rows of the ground-truth lane.
+    pub truth_y: Range<i32>,
+    /// Rows of the analyst-label lane.
+    pub labels_y: Range<i32>,
+    /// Rows of the frame axis labels.
+    pub axis_y: Range<i32>,
+    /// Font size of labels.
+    pub font: f64,
+}
+
+impl TimelineLayout {
+    /// The layout of a timeline of `frames` frames at `size` with `options`.
+    pub fn new(frames: usize, options: &TimelineOptions, size: (u32, u32)) -> Self {
+        let (w, h) = (size.0.max(1) as i32, size.1.max(1) as i32);
+        let font = (f64::from(h) / 24.0).clamp(8.0, 13.0);
+        let line = font.ceil() as i32 + 6;
+        let window = match &options.window {
+            Some(r) if r.start < r.end && r.start < frames => r.start..r.end.min(frames),
+            _ => 0..frames,
+        };
+        let left = (w / 8).clamp(0, 64);
+        let right = (w / 50).clamp(0, 12);
+        let legend = line;
+        let axis = line + 2;
+        let lane = (h / 16).clamp(2, 16);
+        let free = (h - legend - axis - 2 * lane - 4).max(2);
+        let (score_h, comp_h) = if options.components {
+            (free * 3 / 5, free - free * 3 / 5)
+        } else {
+            (free, 0)
+        };
+        let score_y = legend..legend + score_h;
+        let components_y = score_y.end..score_y.end + comp_h;
+        let truth_y = components_y.end + 2..components_y.end + 2 + lane;
+        let labels_y = truth_y.end + 2..truth_y.end + 2 + lane;
+        let axis_y = labels_y.end..h;
+        Self {
+            size: (w as u32, h as u32),
+            frames: window,
+            plot_x: left..(w - right).max(left + 1),
+            score_y,
+            components_y,
+            truth_y,
+            labels_y,
+            axis_y,
+            font,
+        }
+    }
+
+    fn span(&self) -> (usize, usize) {
+        (self.frames.start, self.frames.len().max(1))
+    }
+
+    fn width(&self) -> usize {
+        (self.plot_x.end - self.plot_x.start).max(1) as usize
+    }
+
+    /// The frame under pixel column `x`, or `None` outside the plot (or with no frames).
+    pub fn frame_at(&self, x: f32) -> Option<usize> {
+        if self.frames.is_empty() || !(x >= self.plot_x.start as f32 && x < self.plot_x.end as f32)
+        {
+            return None;
+        }
+        let (f0, n) = self.span();
+        let k = ((x - self.plot_x.start as f32) as f64 * n as f64 / self.width() as f64) as usize;
+        Some(f0 + k.min(n - 1))
+    }
+
+    /// The pixel column at the centre of `frame` (may lie outside the plot when the frame
+    /// is outside the window).
+    pub fn x_of(&self, frame: usize) -> f32 {
+        let (f0, n) = self.span();
+        self.plot_x.start as f32
+            + ((frame as f64 - f0 as f64 + 0.5) * self.width() as f64 / n as f64) as f32
+    }
+
+    /// Frames `a..b` drawn in plot column `c` (at least one frame).
+    fn column_frames(&self, c: usize) -> Range<usize> {
+        let (f0, n) = self.span();
+        let w = self.width();
+        let a = c * n / w;
+        let b = ((c + 1) * n / w).max(a + 1).min(n);
+        f0 + a.min(n - 1)..f0 + b
+    }
+}
+
+/// Min, max and last finite value of `values` over `frames`.
+fn column_stats(values: &[f64], frames: Range<usize>) -> Option<(f64, f64, f64)> {
+    let slice = values.get(frames.start.min(values.len())..frames.end.min(values.len()))?;
+    let mut out: Option<(f64, f64, f64)> = None;
+    for &v in slice {
+        if v.is_finite() {
+            out = Some(match out {
+                None => (v, v, v),
+                Some((lo, hi, _)) => (lo.min(v), hi.max(v), v),
+            });
+        }
+    }
+    out
+}
+
+/// Value range over the finite values of `series` in `frames`, plus `extra`, padded.
+fn value_range(series: &[&[f64]], frames: &Range<usize>, extra: Option<f64>) -> (f64, f64) {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for s in series {
+        let end = frames.end.min(s.len());
+        for &v in s.get(frames.start.min(end)..end).unwrap_or(&[]) {
+            if v.is_finite() {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+    }
+    if let Some(t) = extra.filter(|t| t.is_finite()) {
+        lo = lo.min(t);
+        hi = hi.max(t);
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return (0.0, 1.0);
+    }
+    let pad = if hi > lo { 0.06 * (hi - lo) } else { 1.0 };
+    (lo - pad, hi + pad)
+}
+
+/// Row of value `v` in `rows` for the value range (lo, hi).
+fn row_of(v: f64, rows: &Range<i32>, (lo, hi): (f64, f64)) -> i32 {
+    let t = ((v - lo) / (hi - lo)).clamp(0.0, 1.0);
+    rows.end - 1 - (t * f64::from(rows.end - rows.start - 1).max(0.0)).round() as i32
+}
+
+/// Draws `values` in `rows`: per column a vertical segment over the min and max of its
+/// frames, extended to the previous column's last value so the line stays connected;
+/// `thick` draws it two pixels wide.
+#[allow(clippy::too_many_arguments)]
+fn draw_series(
+    canvas: &mut Canvas,
+    layout: &TimelineLayout,
+    values: &[f64],
+    rows: &Range<i32>,
+    range: (f64, f64),
+    color: [u8; 3],
+    thick: bool,
+) {
+    if values.is_empty() || rows.is_empty() {
+        return;
+    }
+    let mut previous: Option<f64> = None;
+    for c in 0..layout.width() {
+        let x = layout.plot_x.start + c as i32;
+        let Some((mut lo, mut hi, last)) = column_stats(values, layout.column_frames(c)) else {
+            previous = None;
+            continue;
+        };
+        if let Some(p) = previous {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        let (y_lo, y_hi) = (row_of(lo, rows, range), row_of(hi, rows, range));
+        canvas.line(x, y_lo, x, y_hi, color);
+        if thick {
+            canvas.line(x, y_lo - 1, x, y_hi - 1, color);
+        }
+        previous = Some(last);
+    }
+}
+
+/// Fills the columns of `rows` whose frames satisfy `pick` (`Some(colour)`).
+fn draw_lane(
+    canvas: &mut Canvas,
+    layout: &TimelineLayout,
+    rows: &Range<i32>,
+    alpha: f32,
+    mut pick: impl FnMut(Range<usize>) -> Option<[u8; 3]>,
+) {
+    for c in 0..layout.width() {
+        if let Some(color) = pick(layout.column_frames(c)) {
+            let x = layout.plot_x.start + c as i32;
+            canvas.fill_rect(x, rows.start, x + 1, rows.end, color, alpha);
+        }
+    }
+}
+
+/// Axes and value labels of one panel, by plotters.
+fn draw_axes(
+    canvas: &mut Canvas,
+    layout: &TimelineLayout,
+    rows: &Range<i32>,
+    range: (f64, f64),
+    x_labels: bool,
+    title: &str,
+) {
+    let (w, _) = layout.size;
+    let top = rows.start.max(0) as u32;
+    let height = (rows.end - rows.start).max(1) as u32;
+    let left = layout.plot_x.start.max(0) as u32;
+    let right = (w as i32 - layout.plot_x.end).max(0) as u32;
+    let axis_h = if x_labels {
+        (layout.axis_y.end - layout.axis_y.start).max(0) as u32
+    } else {
+        0
+    };
+    let (f0, f1) = (
+        layout.frames.start as f64,
+        layout.frames.end.max(layout.frames.start + 1) as f64,
+    );
+    let label_style = (FAMILY, layout.font).into_font().color(&RGBColor(
+        LEGEND_TEXT[0],
+        LEGEND_TEXT[1],
+        LEGEND_TEXT[2],
+    ));
+    let backend = canvas.plotters();
+    let root = backend.into_drawing_area();
+    let area = root.shrink((0, top), (w, height + axis_h));
+    let mut builder = ChartBuilder::on(&area);
+    builder
+        .margin_right(right)
+        .y_label_area_size(left)
+        .x_label_area_size(axis_h);
+    let Ok(mut chart) = builder.build_cartesian_2d(f0..f1, range.0..range.1) else {
+        return;
+    };
+    let y_labels = (height / 28).clamp(2, 6) as usize;
+    let _ = chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .y_labels(y_labels)
+        .x_labels(if x_labels {
+            (w / 90).clamp(2, 12) as usize
+        } else {
+            0
+        })
+        .bold_line_style(RGBColor(60, 62, 68))
+        .light_line_style(TRANSPARENT)
+        .axis_style(RGBColor(120, 120, 120))
+        .label_style(label_style.clone())
+        .y_label_formatter(&|v| short_number(*v))
+        .x_label_formatter(&|v| format!("{}", v.round() as i64))
+        .y_desc(title)
+        .axis_desc_style(label_style)
+        .draw();
+}
+
+/// Draws a dashed horizontal line at row `y` over the plot columns.
+fn dashed(canvas: &mut Canvas, layout: &TimelineLayout, y: i32, color: [u8; 3]) {
+    let mut x = layout.plot_x.start;
+    while x < layout.plot_x.end {
+        canvas.line(x, y, (x + 5).min(layout.plot_x.end - 1), y, color);
+        x += 9;
+    }
+}
+
+/// Draws a legend row of (colour, text) swatches starting at (x, y).
+fn legend_row(canvas: &mut Canvas, mut x: i32, y: i32, font: f64, items: &[([u8; 3], &str)]) {
+    for (color, text) in items {
+        canvas.fill_rect(
+            x,
+            y + font as i32 / 2 - 1,
+            x + 14,
+            y + font as i32 / 2 + 2,
+            *color,
+            1.0,
+        );
+        canvas.text(x + 18, y, text, font, LEGEND_TEXT, Anchor::TopLeft);
+        x += 30 + Canvas::text_size(text, font).0 as i32;
+    }
+}
+
+/// Renders the timeline at `size` (width, height).
+pub fn timeline(
+    input: &TimelineInput<'_>,
+    options: &TimelineOptions,
+    size: (u32, u32),
+) -> RgbaImage {
+    let mut canvas = Canvas::new(size.0, size.1, BACKGROUND);
+    draw_timeline(&mut canvas, input, options);
+    canvas.into_rgba()
+}
+
+/// Draws the timeline over the whole of `canvas`.
+pub(crate) fn draw_timeline(
+    canvas: &mut Canvas,
+    input: &TimelineInput<'_>,
+    options: &TimelineOptions,
+) {
+    let layout = TimelineLayout::new(input.frames(), options, (canvas.width(), canvas.height()));
+    if layout.frames.is_empty() {
+        let (w, h) = layout.size;
+        canvas.text(
+            w as i32 / 2,
+            h as i32 / 2,
+            "no frames",
+            layout.font,
+            LEGEND_TEXT,
+            Anchor::Center,
+        );
+        return;
+    }
+    let frames = layout.frames.clone();
+    let mut scored: Vec<&[f64]> = Vec::new();
+    if options.raw {
+        scored.push(input.fused);
+    }
+    if options.filtered {
+        scored.push(input.filtered);
+    }
+    let score_range = value_range(&scored, &frames, input.threshold);
+    let comp_range = value_range(&[input.z_r, input.z_p], &frames, None);
+    let has_components = options.components && !layout.components_y.is_empty();
+
+    draw_axes(
+        canvas,
+        &layout,
+        &layout.score_y,
+        score_range,
+        false,
+        "frame score",
+    );
+    if has_components {
+        draw_axes(
+            canvas,
+            &layout,
+            &layout.components_y,
+            comp_range,
+            false,
+            "z-score",
+        );
+    }
+    let lanes = layout.truth_y.start..layout.labels_y.end;
+    draw_axes(canvas, &layout, &lanes, (0.0, 1.0), true, "");
+
+    // Ground-truth anomalies shade the score panels and fill their lane.
+    let truth = |r: Range<usize>| {
+        input
+            .truth
+            .get(r.start.min(input.truth.len())..r.end.min(input.truth.len()))
+            .is_some_and(|s| s.iter().any(|&t| t))
+    };
+    let panels = layout.score_y.start..if has_components {
+        layout.components_y.end
+    } else {
+        layout.score_y.end
+    };
+    draw_lane(canvas, &layout, &panels, 0.16, |r| {
+        truth(r).then_some(TRUTH)
+    });
+    draw_lane(canvas, &layout, &layout.truth_y, 0.9, |r| {
+        truth(r).then_some(TRUTH)
+    });
+    draw_lane(canvas, &layout, &layout.labels_y, 0.9, |r| {
+        let slice = input
+            .labels
+            .get(r.start.min(input.labels.len())..r.end.min(input.labels.len()))?;
+        if slice.contains(&Some(true)) {
+            Some(LABEL_ANOMALY)
+        } else if slice.contains(&Some(false)) {
+            Some(LABEL_NORMAL)
+        } else {
+            None
+        }
+    });
+    for (rows, name) in [(&layout.truth_y, "truth"), (&layout.labels_y, "labels")] {
+        if rows.end - rows.start >= 8 {
+            let font = f64::from(rows.end - rows.start).min(layout.font);
+            canvas.text(
+                layout.plot_x.start - 4,
+                (rows.start + rows.end) / 2,
+                name,
+                font,
+                LEGEND_TEXT,
+                Anchor::MiddleRight,
+            );
+        }
+    }
+
+    if options.raw {
+        draw_series(
+            canvas,
+            &layout,
+            input.fused,
+            &layout.score_y,
+            score_range,
+            RAW,
+            false,
+        );
+    }
+    if options.filtered {
+        draw_series(
+            canvas,
+            &layout,
+            input.filtered,
+            &layout.score_y,
+            score_range,
+            FILTERED,
+            true,
+        );
+    }
+    if let Some(t) = input.threshold.filter(|t| t.is_finite()) {
+        let y = row_of(t, &layout.score_y, score_range);
+        dashed(canvas, &layout, y, THRESHOLD);
+        let text = format!("threshold {}", short_number(t));
+        canvas.text(
+            layout.plot_x.end - 4,
+            y - layout.font as i32 - 3,
+            &text,
+            layout.font,
+            THRESHOLD,
+            Anchor::TopRight,
+        );
+    }
+    if has_components {
+        draw_series(
+            canvas,
+            &layout,
+            input.z_r,
+            &layout.components_y,
+            comp_range,
+            Z_R,
+            false,
+        );
+        draw_series(
+            canvas,
+            &layout,
+            input.z_p,
+            &layout.components_y,
+            comp_range,
+            Z_P,
+            false,
+        );
+    }
+    let mut items: Vec<([u8; 3], &str)> = Vec::new();
+    if options.raw {
+        items.push((RAW, "fused score (raw)"));
+    }
+    if options.filtered {
+        items.push((FILTERED, "fused (median-filtered)"));
+    }
+    if has_components {
+        items.push((Z_R, "z(S_r) flow"));
+        items.push((Z_P, "z(S_p) frame"));
+    }
+    items.push((TRUTH, "ground-truth anomaly"));
+    items.push((LABEL_ANOMALY, "label: anomaly"));
+    items.push((LABEL_NORMAL, "label: normal"));
+    legend_row(canvas, layout.plot_x.start, 2, layout.font, &items);
+
+    if let Some(cursor) = input.cursor.filter(|c| frames.contains(c)) {
+        let x = layout.x_of(cursor).floor() as i32;
+        canvas.line(x, layout.score_y.start, x, layout.labels_y.end, CURSOR);
+        let text = format!("frame {cursor}");
+        let (tw, _) = Canvas::text_size(&text, layout.font);
+        let tx = (x + 3).min(layout.plot_x.end - tw as i32 - 2);
+        canvas.label(
+            tx,
+            layout.score_y.start + 2,
+            &text,
+            layout.font,
+            CURSOR,
+            [20, 20, 20],
+        );
+    }
+}

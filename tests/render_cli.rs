@@ -1,0 +1,306 @@
+//! `vadscope render` and `vadscope export` end to end: a tiny generated scenario and a tiny
+//! random checkpoint made here; the commands score it (no cache yet), write every view, a
+//! GIF, annotated frames and a `scores.csv` that parses; bad input fails with a message.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use burn::tensor::Device;
+use vadscope::eval::MeanStd;
+use vadscope::model::{
+    CheckpointMeta, Hf2Vad, ModelConfig, NoiseRng, PixelStats, TrainingStats, save_checkpoint,
+};
+
+fn vadscope(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vadscope"))
+        .args(args)
+        .env_remove("VADSCOPE_MODEL")
+        .output()
+        .expect("the vadscope binary runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+fn pixel_stats(median: f64, iqr: f64) -> PixelStats {
+    PixelStats {
+        median,
+        q25: median - iqr / 2.0,
+        q75: median + iqr / 2.0,
+        iqr,
+        sampled: 1000,
+        total: 1000,
+    }
+}
+
+/// A random tiny model with plausible training statistics.
+fn tiny_checkpoint(dir: &Path) -> PathBuf {
+    let config = ModelConfig::parity();
+    let model = Hf2Vad::new(&config, &Device::flex(), &mut NoiseRng::new(5)).expect("model");
+    let meta = CheckpointMeta {
+        config,
+        stats: Some(TrainingStats {
+            cubes: 1000,
+            flow_score: MeanStd {
+                mean: 50.0,
+                std: 20.0,
+            },
+            frame_score: MeanStd {
+                mean: 30.0,
+                std: 10.0,
+            },
+            flow_pixel: pixel_stats(0.02, 0.05),
+            frame_pixel: pixel_stats(0.01, 0.02),
+        }),
+        note: Some("render test: random weights".into()),
+    };
+    let path = dir.join("tiny.safetensors");
+    save_checkpoint(&path, &model, &meta).expect("save checkpoint");
+    path
+}
+
+/// Generates one 12-frame 96×64 scenario under `dir` and returns its folder.
+fn tiny_scenario(dir: &Path) -> PathBuf {
+    let out = vadscope(&[
+        "generate",
+        "--out",
+        dir.to_str().unwrap(),
+        "--kind",
+        "normal",
+        "--domain",
+        "city",
+        "--weather",
+        "sun",
+        "--frames",
+        "12",
+        "--size",
+        "96x64",
+        "--seed",
+        "4",
+    ]);
+    assert!(
+        out.status.success(),
+        "generate failed: {}",
+        text(&out.stderr)
+    );
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("Scenario_")
+        })
+        .expect("a scenario folder")
+}
+
+#[test]
+fn render_scores_then_writes_every_view_and_a_gif() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = tiny_scenario(dir.path());
+    let model = tiny_checkpoint(dir.path());
+    let out = dir.path().join("views");
+    let run = vadscope(&[
+        "render",
+        scenario.to_str().unwrap(),
+        "--model",
+        model.to_str().unwrap(),
+        "--frames",
+        "5..8",
+        "--view",
+        "dashboard,frame,pred,flow,timeline,roc",
+        "--size",
+        "320x200",
+        "--gif",
+        "--colormap",
+        "viridis",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "render failed: {}", text(&run.stderr));
+    for view in ["dashboard", "frame", "pred", "flow"] {
+        for index in 5..8 {
+            let path = out.join(format!("{view}_{index:05}.png"));
+            let image = image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            assert_eq!(
+                (image.width(), image.height()),
+                (320, 200),
+                "{}",
+                path.display()
+            );
+        }
+        assert!(out.join(format!("{view}.gif")).is_file(), "{view}.gif");
+    }
+    for name in ["timeline.png", "roc.png", "histogram.png"] {
+        assert!(out.join(name).is_file(), "{name}");
+    }
+    assert!(
+        !out.join("dashboard_00004.png").exists(),
+        "only the asked frames"
+    );
+    let caches: Vec<_> = std::fs::read_dir(scenario.join(".vadscope/scores"))
+        .expect("score cache folder")
+        .collect();
+    assert_eq!(caches.len(), 1, "the scoring run left one cache");
+
+    // A second run finds the cache and gives the same pixels.
+    let again = dir.path().join("again");
+    let run = vadscope(&[
+        "render",
+        scenario.to_str().unwrap(),
+        "--model",
+        model.to_str().unwrap(),
+        "--frames",
+        "6",
+        "--view",
+        "frame",
+        "--size",
+        "320x200",
+        "--colormap",
+        "viridis",
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    assert!(
+        run.status.success(),
+        "second render failed: {}",
+        text(&run.stderr)
+    );
+    let a = std::fs::read(out.join("frame_00006.png")).unwrap();
+    let b = std::fs::read(again.join("frame_00006.png")).unwrap();
+    assert!(a == b, "the same frame rendered twice differs");
+}
+
+#[test]
+fn export_writes_annotated_frames_and_a_scores_csv_with_provenance() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = tiny_scenario(dir.path());
+    let model = tiny_checkpoint(dir.path());
+    let out = dir.path().join("export");
+    let run = vadscope(&[
+        "export",
+        scenario.to_str().unwrap(),
+        "--model",
+        model.to_str().unwrap(),
+        "--frames",
+        "0..3",
+        "--preset",
+        "ad-code",
+        "--threshold",
+        "1.5",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "export failed: {}", text(&run.stderr));
+    for index in 0..3 {
+        assert!(out.join(format!("frames/frame_{index:05}.png")).is_file());
+    }
+    assert!(!out.join("frames/frame_00003.png").exists());
+    let csv = std::fs::read_to_string(out.join("scores.csv")).unwrap();
+    let (header, body): (Vec<&str>, Vec<&str>) = csv.lines().partition(|l| l.starts_with('#'));
+    let header = header.join("\n");
+    for needle in [
+        "# vadscope 0.1.0",
+        "hash ",
+        "# boxes: gt",
+        "# flow: stored",
+        "w_r=0.1 w_p=10",
+        "# threshold: 1.5",
+    ] {
+        assert!(
+            header.contains(needle),
+            "provenance lacks {needle:?}:\n{header}"
+        );
+    }
+    assert_eq!(
+        body[0],
+        "frame,anovox_id,s_r,s_p,fused,filtered,label,prediction"
+    );
+    let rows = &body[1..];
+    assert_eq!(rows.len(), 12, "one row per frame");
+    for (i, row) in rows.iter().enumerate() {
+        let fields: Vec<&str> = row.split(',').collect();
+        assert_eq!(fields.len(), 8, "row {i}: {row}");
+        assert_eq!(fields[0].parse::<usize>().unwrap(), i);
+        fields[1].parse::<u64>().expect("AnoVox id");
+        fields[4].parse::<f64>().expect("fused score");
+        assert!(matches!(fields[6], "0" | "1"), "label: {row}");
+        if !fields[5].is_empty() {
+            let filtered: f64 = fields[5].parse().unwrap();
+            assert_eq!(
+                fields[7],
+                if filtered >= 1.5 { "1" } else { "0" },
+                "prediction: {row}"
+            );
+        }
+    }
+    assert!(
+        rows[0].split(',').nth(5) == Some(""),
+        "the first frames are left out of the filtered score"
+    );
+}
+
+#[test]
+fn bad_input_fails_with_a_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let missing = vadscope(&[
+        "render",
+        "/nonexistent/scenario",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!missing.status.success());
+    assert!(
+        text(&missing.stderr).contains("/nonexistent/scenario"),
+        "{}",
+        text(&missing.stderr)
+    );
+
+    let scenario = tiny_scenario(dir.path());
+    let weights = vadscope(&[
+        "render",
+        scenario.to_str().unwrap(),
+        "--weights",
+        "1,2,3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!weights.status.success());
+    assert!(
+        text(&weights.stderr).contains("four numbers"),
+        "{}",
+        text(&weights.stderr)
+    );
+
+    let model = tiny_checkpoint(dir.path());
+    let range = vadscope(&[
+        "export",
+        scenario.to_str().unwrap(),
+        "--model",
+        model.to_str().unwrap(),
+        "--frames",
+        "50..60",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!range.status.success());
+    let stderr = text(&range.stderr);
+    assert!(
+        stderr.contains("12 frames") && !stderr.contains("panicked"),
+        "{stderr}"
+    );
+
+    let no_model = vadscope(&[
+        "export",
+        scenario.to_str().unwrap(),
+        "--model",
+        "/nonexistent.safetensors",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!no_model.status.success());
+    assert!(text(&no_model.stderr).contains("/nonexistent.safetensors"));
+}
