@@ -2,6 +2,7 @@
 //! the per-frame queries, import/export round trips, crash-safe saving (a SIGKILL in the
 //! middle of a burst of edits) and damaged label files; `vadscope labels` end to end.
 
+mod cli_common;
 mod score_common;
 
 #[path = "annotate/cli.rs"]

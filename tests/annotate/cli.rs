@@ -1,19 +1,12 @@
 //! `vadscope labels` end to end: show, export then import, and clear errors.
 
-use std::process::{Command, Output};
+use std::process::Output;
 
+use super::cli_common::{text, vadscope};
 use super::common::write_scenario;
 
 fn labels(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vadscope"))
-        .arg("labels")
-        .args(args)
-        .output()
-        .expect("run vadscope")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
+    vadscope(&[&["labels"], args].concat())
 }
 
 #[test]
