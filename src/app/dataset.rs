@@ -45,7 +45,7 @@ pub enum ScoreStatus {
     /// Being scored by the background job.
     Scoring(ScoreProgress),
     /// Scored.
-    Ready(Scores),
+    Ready(Box<Scores>),
     /// Scoring failed or was cancelled; the message says why.
     Failed(String),
 }
@@ -54,7 +54,7 @@ impl ScoreStatus {
     /// The scores, when ready.
     pub fn scores(&self) -> Option<&Scores> {
         match self {
-            Self::Ready(scores) => Some(scores),
+            Self::Ready(scores) => Some(scores.as_ref()),
             _ => None,
         }
     }
@@ -151,7 +151,7 @@ impl ScenarioEntry {
             domain: Domain::Unknown,
             weather: Weather::Unknown,
             labels,
-            status: ScoreStatus::Ready(Scores::Table(table)),
+            status: ScoreStatus::Ready(Box::new(Scores::Table(table))),
         }
     }
 

@@ -40,7 +40,7 @@ pub enum JobEvent {
         /// Scenario index.
         scenario: usize,
         /// The opened cache.
-        cache: ScoreCache,
+        cache: Box<ScoreCache>,
         /// Whether it was computed now (rather than found on disk).
         computed: bool,
     },
@@ -167,7 +167,7 @@ fn run_job(
         let event = match score_one(*index, root, setup, &mut model, events, cancel) {
             Ok((cache, computed)) => JobEvent::Scored {
                 scenario: *index,
-                cache,
+                cache: Box::new(cache),
                 computed,
             },
             Err(AppError::Score(ScoreError::Cancelled { .. })) => {

@@ -315,7 +315,7 @@ impl AppState {
                         "scores read from cache"
                     };
                     let message = format!("{}: {how} ({})", e.name, cache.path().display());
-                    e.status = ScoreStatus::Ready(Scores::Cache(cache));
+                    e.status = ScoreStatus::Ready(Box::new(Scores::Cache(*cache)));
                     (
                         LogEntry {
                             level: LogLevel::Info,

@@ -4,6 +4,7 @@
 //! as CSV.
 
 use std::collections::HashMap;
+use std::collections::hash_map::Entry;
 
 use crate::app::failures::FailureKind;
 use crate::app::state::{Action, AppState, LogLevel};
@@ -146,7 +147,7 @@ impl FailurePanel {
         scenario: usize,
         frame: usize,
     ) -> Option<&egui::TextureHandle> {
-        if !self.thumbnails.contains_key(&(scenario, frame)) {
+        if let Entry::Vacant(slot) = self.thumbnails.entry((scenario, frame)) {
             let rgb = state
                 .dataset()?
                 .scenarios
@@ -163,7 +164,7 @@ impl FailurePanel {
                 super::texture::to_color_image(&rgba),
                 egui::TextureOptions::LINEAR,
             );
-            self.thumbnails.insert((scenario, frame), texture);
+            slot.insert(texture);
         }
         self.thumbnails.get(&(scenario, frame))
     }
