@@ -173,7 +173,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         &settings.weights,
         settings.median_kernel,
     );
-    let mut options = settings.options(table);
+    let options = settings.options(table);
     let windowed = args.frames.is_some();
     let evaluation = ScoreLabels {
         scores: &series.filtered[series.skip..],
@@ -241,7 +241,6 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
                 anomaly_mask: scene.mask.as_deref(),
                 caption: Some(&caption),
             };
-            options.timeline.window = windowed.then(|| frames.clone());
             let dims = scene.frame.dimensions();
             for (k, view) in per_frame.iter().enumerate() {
                 let image = match view {

@@ -64,8 +64,11 @@ pub(crate) struct Canvas {
 }
 
 impl Canvas {
-    /// A canvas of `width`×`height` (at least 1×1) filled with `background`.
+    /// A canvas of `width`×`height` (at least 1×1) filled with `background`. Registers the
+    /// font first: plotters resolves a font when its style is made, so it must be known
+    /// before any view builds a text style.
     pub(crate) fn new(width: u32, height: u32, background: [u8; 3]) -> Self {
+        ensure_font();
         let (width, height) = (width.max(1), height.max(1));
         let mut pixels = Vec::with_capacity(3 * width as usize * height as usize);
         for _ in 0..width as usize * height as usize {

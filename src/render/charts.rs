@@ -231,17 +231,17 @@ pub(crate) fn draw_histogram(canvas: &mut Canvas, input: &ScoreLabels<'_>) {
             });
         }
     }
-    if let Some(t) = input.threshold.filter(|t| t.is_finite()) {
-        if let Ok(series) = chart.draw_series(DashedLineSeries::new(
+    if let Some(t) = input.threshold.filter(|t| t.is_finite())
+        && let Ok(series) = chart.draw_series(DashedLineSeries::new(
             [(t, 0.0), (t, f64::from(top) * 1.1)],
             5,
             4,
             MARK.stroke_width(2),
-        )) {
-            series
-                .label(format!("threshold {}", short_number(t)))
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 12, y)], MARK.stroke_width(2)));
-        }
+        ))
+    {
+        series
+            .label(format!("threshold {}", short_number(t)))
+            .legend(|(x, y)| PathElement::new([(x, y), (x + 12, y)], MARK.stroke_width(2)));
     }
     let _ = chart
         .configure_series_labels()

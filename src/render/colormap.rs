@@ -52,6 +52,7 @@ const TURBO: [[f32; 6]; 3] = [
     ],
 ];
 
+#[allow(clippy::excessive_precision)]
 /// Viridis' polynomial coefficients per degree 0 to 6, (r, g, b) each.
 const VIRIDIS: [[f32; 3]; 7] = [
     [0.277_727_33, 0.005_407_344_5, 0.334_099_8],
@@ -63,6 +64,7 @@ const VIRIDIS: [[f32; 3]; 7] = [
     [-5.435_456, 4.645_852_6, 26.312_435],
 ];
 
+#[allow(clippy::excessive_precision)]
 /// Inferno's polynomial coefficients per degree 0 to 6, (r, g, b) each.
 const INFERNO: [[f32; 3]; 7] = [
     [0.000_218_940_37, 0.001_651_004_6, -0.019_480_899],

@@ -10,7 +10,7 @@ use crate::sequence::FlowField;
 use super::canvas::{Anchor, Canvas};
 use super::colormap::Colormap;
 use super::frame_view::BACKGROUND;
-use super::gallery::{GalleryItem, draw_gallery};
+use super::gallery::{GalleryItem, draw_gallery, gallery_order};
 use super::legend::{LEGEND_TEXT, colour_bar, short_number};
 use super::overlay::{Placement, SceneObject, ScoreScale, draw_boxes};
 use super::patches::{colorized_map, crop_range, flow_crop, max_or, patch_side, planar_flow};
@@ -170,7 +170,7 @@ pub(crate) fn draw_flow_view(
         .collect();
     paste_patches(&mut error_image, input.objects, &error_patches);
 
-    let font = (f64::from(h) / 32.0).clamp(8.0, 14.0);
+    let font = (f64::from(h) / 30.0).clamp(9.0, 14.0);
     let title_h = Canvas::text_size("Ag", font).1 + 6;
     let top_h = (h * 11 / 20).saturating_sub(title_h);
     let third = w / 3;
@@ -216,11 +216,11 @@ pub(crate) fn draw_flow_view(
         );
     }
 
-    let items: Vec<GalleryItem> = input
-        .objects
+    let (order, total) = gallery_order(input.objects);
+    let items: Vec<GalleryItem> = order
         .iter()
-        .zip(&crops)
-        .filter_map(|(o, crop)| {
+        .filter_map(|&k| {
+            let (o, crop) = (&input.objects[k], &crops[k]);
             let maps = o.maps?;
             let p = patch_side(maps.recon_flow.len(), 2).max(1);
             let actual = crop.as_ref().map_or_else(
@@ -248,6 +248,7 @@ pub(crate) fn draw_flow_view(
         canvas,
         (x, gallery_y, w.saturating_sub(bar_w), gallery_h),
         &items,
+        total,
         &["flow", "reconstruction", "error"],
         "no scored object in this frame",
     );

@@ -1,11 +1,12 @@
-//! The per-object gallery shared by the prediction and flow views: for each object a row
-//! of equally sized tiles (e.g. actual, model output, error) under column titles, laid out
-//! in as many rows and columns as make the tiles largest.
+//! The per-object gallery shared by the prediction and flow views: for the highest-scoring
+//! objects a group of equally sized tiles (e.g. actual, model output, error) under a header
+//! that names them, laid out in as many rows and columns as make the tiles largest.
 
 use image::RgbImage;
 
 use super::canvas::{Anchor, Canvas};
 use super::legend::LEGEND_TEXT;
+use super::overlay::SceneObject;
 
 /// One object's tiles and its label.
 pub(crate) struct GalleryItem {
@@ -18,12 +19,16 @@ pub(crate) struct GalleryItem {
 /// Largest tile side drawn (6× a 32-pixel patch).
 const MAX_TILE: u32 = 192;
 
-/// Draws `items` into the rectangle (x, y, w, h), tile columns titled `titles`; says so
-/// when there is no object.
+/// Objects shown at most, the highest-scoring first.
+pub(crate) const GALLERY_OBJECTS: usize = 6;
+
+/// Draws `items` (chosen by [`gallery_order`] from `total` objects) into the rectangle
+/// (x, y, w, h), tile columns titled `titles`; says so when there is no object.
 pub(crate) fn draw_gallery(
     canvas: &mut Canvas,
     (x, y, w, h): (i32, i32, u32, u32),
     items: &[GalleryItem],
+    total: usize,
     titles: &[&str],
     empty_message: &str,
 ) {
@@ -40,6 +45,17 @@ pub(crate) fn draw_gallery(
         );
         return;
     }
+    let header = if total > items.len() {
+        format!(
+            "{} highest-scoring of {total} objects: {}",
+            items.len(),
+            titles.join(" | ")
+        )
+    } else {
+        format!("per object: {}", titles.join(" | "))
+    };
+    canvas.text(x + 4, y, &header, font, LEGEND_TEXT, Anchor::TopLeft);
+    let (y, h) = (y + line as i32, h.saturating_sub(line));
     let per = titles.len().max(1) as u32;
     let gap = 4u32;
     let n = items.len() as u32;
@@ -47,7 +63,7 @@ pub(crate) fn draw_gallery(
     for rows in 1..=n {
         let cols = n.div_ceil(rows);
         let by_w = (w.saturating_sub(cols * 2 * gap) / cols.max(1)).saturating_sub(per * gap) / per;
-        let by_h = (h.saturating_sub(line) / rows).saturating_sub(line + gap);
+        let by_h = (h / rows).saturating_sub(line + gap);
         let tile = by_w.min(by_h).min(MAX_TILE);
         if tile > best.0 {
             best = (tile, rows);
@@ -63,17 +79,26 @@ pub(crate) fn draw_gallery(
     for (k, item) in items.iter().enumerate() {
         let (r, c) = (k as u32 / cols, k as u32 % cols);
         let gx = x + (c * group_w) as i32 + gap as i32;
-        let gy = y + line as i32 + (r * row_h) as i32;
-        if r == 0 {
-            for (t, title) in titles.iter().enumerate() {
-                let tx = gx + (t as u32 * (tile + gap) + tile / 2) as i32;
-                canvas.text(tx, y, title, font, LEGEND_TEXT, Anchor::TopCenter);
-            }
-        }
+        let gy = y + (r * row_h) as i32;
         canvas.text(gx, gy, &item.label, font, LEGEND_TEXT, Anchor::TopLeft);
         for (t, image) in item.tiles.iter().enumerate() {
             let tx = gx + (t as u32 * (tile + gap)) as i32;
             canvas.blit_scaled_nearest(image, tx, gy + line as i32, tile, tile);
         }
     }
+}
+
+/// Indices of the objects with maps, highest score first, at most [`GALLERY_OBJECTS`];
+/// and how many objects have maps.
+pub(crate) fn gallery_order(objects: &[SceneObject<'_>]) -> (Vec<usize>, usize) {
+    let mut order: Vec<usize> = (0..objects.len())
+        .filter(|&k| objects[k].maps.is_some())
+        .collect();
+    let total = order.len();
+    order.sort_by(|&a, &b| {
+        let key = |k: usize| objects[k].score.unwrap_or(f64::NEG_INFINITY);
+        key(b).total_cmp(&key(a))
+    });
+    order.truncate(GALLERY_OBJECTS);
+    (order, total)
 }

@@ -42,7 +42,7 @@ pub use frame_view::{
     Caption, FrameViewInput, FrameViewOptions, HeatRange, MASK_COLOR, REFERENCE_RANGE_IQR,
     frame_view, natural_size,
 };
-pub use overlay::{SceneObject, ScoreScale};
+pub use overlay::{LABELLED_BOXES, SceneObject, ScoreScale};
 pub use pred_view::{PredViewInput, PredViewOptions, pred_view};
 pub use scene::{
     FrameScene, REFERENCE_THRESHOLD_SIGMA, ScoreSeries, ViewSettings, reference_error_range,

@@ -62,7 +62,7 @@ impl ScoreScale {
     /// Position of `score` on the scale, in [0, 1].
     pub fn position(&self, score: f64) -> f32 {
         let span = self.high - self.low;
-        if !(span.is_finite() && span > 0.0) || !score.is_finite() {
+        if !(span.is_finite() && span > 0.0 && score.is_finite()) {
             return 0.0;
         }
         ((score - self.low) / span).clamp(0.0, 1.0) as f32
@@ -124,7 +124,11 @@ pub(crate) fn label_size(height: u32) -> f64 {
     (f64::from(height) / 36.0).clamp(9.0, 16.0)
 }
 
-/// Draws the boxes of `objects` with "#track score" labels, coloured by score.
+/// Boxes labelled at most, the highest-scoring first (crowded scenes stay readable).
+pub const LABELLED_BOXES: usize = 6;
+
+/// Draws the boxes of `objects` coloured by score, and "#track score" labels on the
+/// [`LABELLED_BOXES`] highest-scoring ones whose label does not cover another label.
 pub(crate) fn draw_boxes(
     canvas: &mut Canvas,
     place: &Placement,
@@ -134,29 +138,59 @@ pub(crate) fn draw_boxes(
 ) {
     let size = label_size(place.h);
     let thickness = if place.h >= 240 { 2 } else { 1 };
-    for object in objects {
-        let color = object
+    let color_of = |object: &SceneObject<'_>| {
+        object
             .score
-            .map_or(UNSCORED_BOX, |s| colormap.colorize(scale.position(s)));
+            .map_or(UNSCORED_BOX, |s| colormap.colorize(scale.position(s)))
+    };
+    for object in objects {
+        let (x0, y0, x1, y1) = place.rect(object.bbox);
+        if x1 > x0 && y1 > y0 {
+            canvas.outline_rect(x0, y0, x1, y1, color_of(object), thickness);
+        }
+    }
+    if place.h < 48 {
+        return;
+    }
+    let mut order: Vec<&SceneObject<'_>> = objects.iter().collect();
+    order.sort_by(|a, b| {
+        let key = |o: &SceneObject<'_>| o.score.unwrap_or(f64::NEG_INFINITY);
+        key(b).total_cmp(&key(a))
+    });
+    let mut taken: Vec<(i32, i32, i32, i32)> = Vec::new();
+    for object in order {
+        if taken.len() >= LABELLED_BOXES {
+            break;
+        }
         let (x0, y0, x1, y1) = place.rect(object.bbox);
         if x1 <= x0 || y1 <= y0 {
-            continue;
-        }
-        canvas.outline_rect(x0, y0, x1, y1, color, thickness);
-        if place.h < 48 {
             continue;
         }
         let text = match object.score {
             Some(s) => format!("#{} {s:.1}", object.track_id),
             None => format!("#{}", object.track_id),
         };
-        let (_, th) = Canvas::text_size(&text, size);
-        let ly = if y0 - th as i32 - 4 >= place.y {
-            y0 - th as i32 - 4
+        let (tw, th) = Canvas::text_size(&text, size);
+        let pad = (size / 5.0).ceil() as i32;
+        let (w, h) = (tw as i32 + 2 * pad, th as i32 + 2 * pad);
+        let ly = if y0 - h >= place.y { y0 - h } else { y1 };
+        let rect = (x0, ly, x0 + w, ly + h);
+        let overlaps = taken
+            .iter()
+            .any(|r| rect.0 < r.2 && r.0 < rect.2 && rect.1 < r.3 && r.1 < rect.3);
+        if overlaps {
+            continue;
+        }
+        taken.push(rect);
+        let plate = color_of(object);
+        let luminance =
+            0.299 * f32::from(plate[0]) + 0.587 * f32::from(plate[1]) + 0.114 * f32::from(plate[2]);
+        let ink = if luminance > 140.0 {
+            [0, 0, 0]
         } else {
-            y1
+            [255, 255, 255]
         };
-        canvas.label(x0, ly, &text, size, color, [20, 20, 20]);
+        canvas.label(x0, ly, &text, size, ink, plate);
     }
 }
 

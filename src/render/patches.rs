@@ -74,13 +74,11 @@ pub(crate) fn frame_crop(frame: &RgbImage, bbox: [f32; 4], p: u32) -> Option<Rgb
         let (a, b, fx) = xs[x as usize];
         let (c, d, fy) = ys[y as usize];
         let at = |xx: usize, yy: usize| frame.get_pixel(x0 + xx as u32, y0 + yy as u32).0;
-        let mut out = [0u8; 3];
-        for ch in 0..3 {
+        Rgb(std::array::from_fn(|ch| {
             let top = f32::from(at(a, c)[ch]) * (1.0 - fx) + f32::from(at(b, c)[ch]) * fx;
             let bottom = f32::from(at(a, d)[ch]) * (1.0 - fx) + f32::from(at(b, d)[ch]) * fx;
-            out[ch] = (top * (1.0 - fy) + bottom * fy).round() as u8;
-        }
-        Rgb(out)
+            (top * (1.0 - fy) + bottom * fy).round() as u8
+        }))
     }))
 }
 

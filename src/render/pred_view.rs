@@ -7,7 +7,7 @@ use image::{RgbImage, RgbaImage};
 use super::canvas::{Anchor, Canvas};
 use super::colormap::Colormap;
 use super::frame_view::BACKGROUND;
-use super::gallery::{GalleryItem, draw_gallery};
+use super::gallery::{GalleryItem, draw_gallery, gallery_order};
 use super::legend::{LEGEND_TEXT, colour_bar};
 use super::overlay::{Placement, SceneObject, ScoreScale, draw_boxes};
 use super::patches::{colorized_map, crop_range, frame_crop, max_or, patch_side, planar_rgb};
@@ -84,7 +84,7 @@ pub(crate) fn draw_pred_view(
     options: &PredViewOptions,
     (x, y, w, h): (i32, i32, u32, u32),
 ) {
-    let font = (f64::from(h) / 32.0).clamp(8.0, 14.0);
+    let font = (f64::from(h) / 30.0).clamp(9.0, 14.0);
     let title_h = Canvas::text_size("Ag", font).1 + 6;
     let top_h = (h * 11 / 20).saturating_sub(title_h);
     let half = w / 2;
@@ -139,9 +139,11 @@ pub(crate) fn draw_pred_view(
             ((0.0, max), true)
         }
     };
-    let items: Vec<GalleryItem> = scored
+    let (order, total) = gallery_order(input.objects);
+    let items: Vec<GalleryItem> = order
         .iter()
-        .filter_map(|o| {
+        .filter_map(|&k| {
+            let o = &input.objects[k];
             let maps = o.maps?;
             let p = patch_side(maps.predicted.len(), 3);
             let actual = frame_crop(input.frame, o.bbox, p)?;
@@ -166,7 +168,8 @@ pub(crate) fn draw_pred_view(
         canvas,
         (x, gallery_y, w.saturating_sub(bar_w), gallery_h),
         &items,
-        &["actual patch", "predicted patch", "prediction error"],
+        total,
+        &["actual", "predicted", "error"],
         "no scored object in this frame",
     );
     if bar_w > 0 {
@@ -191,7 +194,7 @@ pub(crate) fn draw_pred_view(
 /// "#track score" of a gallery entry.
 pub(crate) fn object_label(object: &SceneObject<'_>) -> String {
     match object.score {
-        Some(s) => format!("#{} score {s:.2}", object.track_id),
+        Some(s) => format!("#{} {s:.1}", object.track_id),
         None => format!("#{}", object.track_id),
     }
 }

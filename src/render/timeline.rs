@@ -239,9 +239,9 @@ fn row_of(v: f64, rows: &Range<i32>, (lo, hi): (f64, f64)) -> i32 {
     rows.end - 1 - (t * f64::from(rows.end - rows.start - 1).max(0.0)).round() as i32
 }
 
-/// Draws `values` in `rows`: per column a vertical segment over the min and max of its
-/// frames, extended to the previous column's last value so the line stays connected;
-/// `thick` draws it two pixels wide.
+/// Draws `values` in `rows`: with more frames than columns, per column a vertical segment
+/// over the min and max of its frames, extended to the previous column's last value so the
+/// line stays connected; else a polyline through the frames. `thick` doubles the line.
 #[allow(clippy::too_many_arguments)]
 fn draw_series(
     canvas: &mut Canvas,
@@ -253,6 +253,30 @@ fn draw_series(
     thick: bool,
 ) {
     if values.is_empty() || rows.is_empty() {
+        return;
+    }
+    if layout.frames.len() <= layout.width() {
+        // Fewer frames than columns: straight segments between frame centres.
+        let end = layout.frames.end.min(values.len());
+        let mut previous: Option<(i32, i32)> = None;
+        let start = layout.frames.start.min(end);
+        for (k, &v) in values[start..end]
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (start + i, v))
+        {
+            if !v.is_finite() {
+                previous = None;
+                continue;
+            }
+            let point = (layout.x_of(k).floor() as i32, row_of(v, rows, range));
+            let from = previous.unwrap_or(point);
+            canvas.line(from.0, from.1, point.0, point.1, color);
+            if thick {
+                canvas.line(from.0, from.1 - 1, point.0, point.1 - 1, color);
+            }
+            previous = Some(point);
+        }
         return;
     }
     let mut previous: Option<f64> = None;
@@ -330,13 +354,17 @@ fn draw_axes(
     let Ok(mut chart) = builder.build_cartesian_2d(f0..f1, range.0..range.1) else {
         return;
     };
-    let y_labels = (height / 28).clamp(2, 6) as usize;
+    let y_labels = if title.is_empty() {
+        0
+    } else {
+        (height / 28).clamp(2, 6) as usize
+    };
     let _ = chart
         .configure_mesh()
         .disable_x_mesh()
         .y_labels(y_labels)
         .x_labels(if x_labels {
-            (w / 90).clamp(2, 12) as usize
+            ((w / 90).clamp(2, 12) as usize).min(layout.frames.len() + 1)
         } else {
             0
         })
@@ -345,7 +373,13 @@ fn draw_axes(
         .axis_style(RGBColor(120, 120, 120))
         .label_style(label_style.clone())
         .y_label_formatter(&|v| short_number(*v))
-        .x_label_formatter(&|v| format!("{}", v.round() as i64))
+        .x_label_formatter(&|v| {
+            if (v - v.round()).abs() < 1e-6 {
+                format!("{}", v.round() as i64)
+            } else {
+                String::new()
+            }
+        })
         .y_desc(title)
         .axis_desc_style(label_style)
         .draw();
