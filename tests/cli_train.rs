@@ -220,7 +220,7 @@ fn an_interrupted_run_resumes_and_a_corrupt_checkpoint_is_reported() {
         text(&failed.stderr)
     );
 
-    let mut resume_args = args.clone();
+    let mut resume_args = args;
     resume_args.push("--resume".into());
     let resumed = run(&resume_args);
     let stdout = text(&resumed.stdout);
