@@ -343,10 +343,7 @@ fn bad_inputs_fail_with_a_message_naming_them() {
     let data = dataset(dir.path());
     let data_s = data.to_str().unwrap();
     let err = fail(&["eval", data_s, "--model", model_s, "--weights", "1,2,x"]);
-    assert!(
-        err.contains("1,2,x") && err.contains("four numbers"),
-        "{err}"
-    );
+    assert!(err.contains("1,2,x") && err.contains("--weights"), "{err}");
     let err = fail(&["eval", data_s, "--model", model_s, "--weights", "1,2,3"]);
     assert!(err.contains("four numbers"), "{err}");
 
