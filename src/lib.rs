@@ -5,6 +5,7 @@
 //! one-way data flow.
 
 pub mod annotate;
+pub mod app;
 pub mod eval;
 pub mod flow;
 pub mod model;

@@ -54,13 +54,15 @@ pub enum BoxArg {
 pub enum PresetArg {
     /// HF²-VAD_AD paper text: 10 / 0.1.
     PaperText,
-    /// HF²-VAD_AD committed config: 0.1 / 10.
+    /// HF²-VAD_AD committed config: 0.1 / 10 (`paper-code` works too).
+    #[value(alias = "paper-code")]
     AdCode,
     /// Original HF²-VAD: 1 / 0.1.
     Original,
 }
 
-fn parse_weights(text: &str) -> Result<FusionWeights, String> {
+/// Parses `--weights`: four finite numbers w_r,w_p,w_r_p,w_p_p (also `vadscope eval`'s).
+pub fn parse_weights(text: &str) -> Result<FusionWeights, String> {
     let values: Vec<f64> = text
         .split(',')
         .map(|v| v.trim().parse::<f64>())
@@ -79,15 +81,23 @@ fn parse_weights(text: &str) -> Result<FusionWeights, String> {
     }
 }
 
+impl PresetArg {
+    /// The weights of this preset.
+    pub fn weights(self) -> FusionWeights {
+        match self {
+            Self::PaperText => FusionWeights::PAPER_TEXT,
+            Self::AdCode => FusionWeights::AD_CODE,
+            Self::Original => FusionWeights::ORIGINAL,
+        }
+    }
+}
+
 impl ScoreArgs {
     /// The fusion weights asked for.
     pub fn fusion_weights(&self) -> FusionWeights {
-        match (self.weights, self.preset) {
-            (Some(w), _) => w,
-            (None, Some(PresetArg::AdCode)) => FusionWeights::AD_CODE,
-            (None, Some(PresetArg::Original)) => FusionWeights::ORIGINAL,
-            (None, _) => FusionWeights::PAPER_TEXT,
-        }
+        self.weights
+            .or(self.preset.map(PresetArg::weights))
+            .unwrap_or_default()
     }
 
     /// The decision threshold asked for.

@@ -926,6 +926,22 @@ pub fn write_cache(
     writer.finish(table)
 }
 
+/// What [`ScoreCache::find`] found for a key.
+#[derive(Debug)]
+pub enum CacheLookup {
+    /// A cache computed for this key on the scenario as it is now.
+    Current(ScoreCache),
+    /// No cache exists; it would be written at this path.
+    Missing(PathBuf),
+    /// A file exists but cannot be used.
+    Unusable {
+        /// The file.
+        path: PathBuf,
+        /// Why, in words (names the file).
+        reason: String,
+    },
+}
+
 /// An opened score cache: the tables in memory, the maps read from disk on demand.
 #[derive(Debug)]
 pub struct ScoreCache {
@@ -1042,6 +1058,31 @@ impl ScoreCache {
         let cache = Self::open(&path)?;
         cache.check_fits(scenario, key)?;
         Ok(Some(cache))
+    }
+
+    /// Like [`ScoreCache::lookup`], but a cache that exists and cannot be used (stale,
+    /// damaged, of another version) is reported as [`CacheLookup::Unusable`] with the reason
+    /// instead of as an error, so that a caller can score the scenario again in its place.
+    /// Errors are left for what stops scoring too (the cache folder cannot be made).
+    pub fn find(scenario: &Scenario, key: &CacheKey) -> Result<CacheLookup, ScoreError> {
+        let path = key.path_in(&scenario.cache_dir()?);
+        if !path.is_file() {
+            return Ok(CacheLookup::Missing(path));
+        }
+        let opened = Self::open(&path).and_then(|cache| {
+            cache.check_fits(scenario, key)?;
+            Ok(cache)
+        });
+        match opened {
+            Ok(cache) => Ok(CacheLookup::Current(cache)),
+            Err(e @ (ScoreError::Cache { .. } | ScoreError::Io { .. })) => {
+                Ok(CacheLookup::Unusable {
+                    path,
+                    reason: e.to_string(),
+                })
+            }
+            Err(e) => Err(e),
+        }
     }
 
     /// Checks that this cache was computed for `key` on `scenario` as it is now.

@@ -1,6 +1,8 @@
 //! Evaluation over scored scenarios: frame-level metrics by box source and by domain ×
-//! weather ([`evaluate_dataset`]), box IoU of the scored boxes against the ground truth,
-//! and pixel-level ROC metrics of the heatmaps ([`PixelRoc`]).
+//! weather ([`evaluate_dataset`], [`evaluate_table`] with a [`Grouping`]: the paper's
+//! Table 2), the weight study ([`sweep_weights`] over [`sweep_grid`]: Table 3), box IoU of
+//! the scored boxes against the ground truth, and pixel-level ROC metrics of the heatmaps
+//! ([`PixelRoc`], [`add_scenario_pixels`]). [`super::table`] renders the rows.
 //!
 //! Frame AUROC is micro (all metric frames of a group concatenated, as the reference);
 //! macro (mean of per-scenario AUROCs, scenarios with a single class skipped) is reported
@@ -17,7 +19,7 @@ use std::collections::HashMap;
 
 use image::GrayImage;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::eval::{MetricsError, RocCurve, RocPoint, ScoreMetrics, macro_auroc};
 use crate::sequence::{BoxRecord, Domain, Scenario, Weather};
@@ -160,83 +162,166 @@ pub struct EvalRow {
     pub auroc_macro: Option<f64>,
     /// Scenarios that entered the macro AUROC.
     pub macro_scenarios: usize,
+    /// Pixel-level AUROC, AP, FPR95 etc. over the group's heatmaps; `None` when pixels were
+    /// not evaluated or hold a single class.
+    pub pixel: Option<ScoreMetrics>,
     /// Mean IoU of the ground-truth boxes with the scored boxes.
     pub mean_iou: Option<f64>,
     /// Ground-truth boxes found at the IoU threshold.
     pub box_recall: Option<f64>,
 }
 
-fn condition_order(domain: Domain, weather: Weather) -> (u8, u8) {
+/// Which conditions split a box source's scenarios into rows of their own, after the row
+/// over all of them. Both together give one row per domain × weather pair present.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct Grouping {
+    /// Split by road environment.
+    pub domain: bool,
+    /// Split by weather.
+    pub weather: bool,
+}
+
+impl Grouping {
+    /// Only the row over all scenarios of each box source.
+    pub const NONE: Self = Self {
+        domain: false,
+        weather: false,
+    };
+    /// One row per domain × weather pair, as the paper's Table 2.
+    pub const DOMAIN_WEATHER: Self = Self {
+        domain: true,
+        weather: true,
+    };
+
+    /// The group of a scenario under this grouping (`None` = not split on that key).
+    fn key_of(self, item: &ScenarioScores) -> (Option<Domain>, Option<Weather>) {
+        (
+            self.domain.then_some(item.domain),
+            self.weather.then_some(item.weather),
+        )
+    }
+}
+
+fn condition_order(domain: Option<Domain>, weather: Option<Weather>) -> (u8, u8) {
     let d = match domain {
-        Domain::City => 0,
-        Domain::Highway => 1,
-        Domain::Unknown => 2,
+        None => 0,
+        Some(Domain::City) => 1,
+        Some(Domain::Highway) => 2,
+        Some(Domain::Unknown) => 3,
     };
     let w = match weather {
-        Weather::Sun => 0,
-        Weather::Rain => 1,
-        Weather::Fog => 2,
-        Weather::Night => 3,
-        Weather::Unknown => 4,
+        None => 0,
+        Some(Weather::Sun) => 1,
+        Some(Weather::Rain) => 2,
+        Some(Weather::Fog) => 3,
+        Some(Weather::Night) => 4,
+        Some(Weather::Unknown) => 5,
     };
     (d, w)
 }
 
+/// One scenario ready for the metrics: its fused, filtered scores and labels, and its
+/// pixel counts when pixels are evaluated.
+struct Prepared<'a> {
+    item: &'a ScenarioScores,
+    scores: Vec<f64>,
+    labels: Vec<bool>,
+    pixels: Option<&'a PixelRoc>,
+}
+
 fn group_row(
     box_source: &str,
-    condition: Option<(Domain, Weather)>,
-    members: &[(&ScenarioScores, Vec<f64>, Vec<bool>)],
+    condition: (Option<Domain>, Option<Weather>),
+    members: &[&Prepared],
 ) -> Result<EvalRow, ScoreError> {
     let scores: Vec<f64> = members
         .iter()
-        .flat_map(|(_, s, _)| s.iter().copied())
+        .flat_map(|m| m.scores.iter().copied())
         .collect();
     let labels: Vec<bool> = members
         .iter()
-        .flat_map(|(_, _, l)| l.iter().copied())
+        .flat_map(|m| m.labels.iter().copied())
         .collect();
+    let invalid = |e: MetricsError| ScoreError::Invalid(format!("{box_source}: {e}"));
     let metrics = match ScoreMetrics::compute(&scores, &labels) {
         Ok(m) => Some(m),
         Err(MetricsError::SingleClass { .. }) => None,
-        Err(e) => return Err(ScoreError::Invalid(format!("{box_source}: {e}"))),
+        Err(e) => return Err(invalid(e)),
     };
-    let per_scenario = members.iter().map(|(_, s, l)| (s.as_slice(), l.as_slice()));
-    let macro_result =
-        macro_auroc(per_scenario).map_err(|e| ScoreError::Invalid(format!("{box_source}: {e}")))?;
+    let per_scenario = members
+        .iter()
+        .map(|m| (m.scores.as_slice(), m.labels.as_slice()));
+    let macro_result = macro_auroc(per_scenario).map_err(invalid)?;
     let mut boxes: Option<BoxMatchStats> = None;
-    for (m, _, _) in members {
-        if let Some(b) = &m.boxes {
+    let mut pixels: Option<PixelRoc> = None;
+    for m in members {
+        if let Some(b) = &m.item.boxes {
             boxes
                 .get_or_insert_with(|| BoxMatchStats::new(b.iou_threshold))
                 .merge(b);
         }
+        if let Some(p) = m.pixels {
+            pixels.get_or_insert_with(PixelRoc::new).merge(p);
+        }
     }
+    let pixel = match pixels.map(|p| p.curve()) {
+        None | Some(Err(MetricsError::SingleClass { .. })) => None,
+        Some(Ok(curve)) => Some(curve.metrics()),
+        Some(Err(e)) => return Err(invalid(e)),
+    };
     Ok(EvalRow {
         box_source: box_source.to_string(),
-        domain: condition.map(|c| c.0),
-        weather: condition.map(|c| c.1),
+        domain: condition.0,
+        weather: condition.1,
         scenarios: members.len(),
         frames: labels.len(),
         anomalous_frames: labels.iter().filter(|&&l| l).count(),
         metrics,
         auroc_macro: macro_result.map(|(a, _)| a),
         macro_scenarios: macro_result.map_or(0, |(_, n)| n),
+        pixel,
         mean_iou: boxes.and_then(|b| b.mean_iou()),
         box_recall: boxes.and_then(|b| b.recall()),
     })
 }
 
-/// The evaluation table: per box source (in order of first appearance) a row over all its
-/// scenarios, followed by one row per domain × weather present.
+/// The evaluation table with the paper's Table 2 rows: per box source (in order of first
+/// appearance) a row over all its scenarios, followed by one row per domain × weather
+/// present. See [`evaluate_table`] for other groupings and pixel metrics.
 pub fn evaluate_dataset(
     items: &[ScenarioScores],
     weights: &FusionWeights,
     options: &FrameMetricOptions,
 ) -> Result<Vec<EvalRow>, ScoreError> {
+    evaluate_table(items, None, weights, options, Grouping::DOMAIN_WEATHER)
+}
+
+/// The evaluation table: per box source (in order of first appearance) a row over all its
+/// scenarios, followed by one row per group of `grouping` present (in the order city,
+/// highway and sun, rain, fog, night). `pixels`, when given, holds one [`PixelRoc`] per
+/// item (computed with the same weights, see [`add_scenario_pixels`]) and fills the rows'
+/// pixel metrics.
+pub fn evaluate_table(
+    items: &[ScenarioScores],
+    pixels: Option<&[PixelRoc]>,
+    weights: &FusionWeights,
+    options: &FrameMetricOptions,
+    grouping: Grouping,
+) -> Result<Vec<EvalRow>, ScoreError> {
+    if let Some(p) = pixels
+        && p.len() != items.len()
+    {
+        return Err(ScoreError::Invalid(format!(
+            "{} pixel counts for {} scenarios",
+            p.len(),
+            items.len()
+        )));
+    }
     // Scenarios are fused and filtered independently: spread them over the cores.
     let prepared = items
         .par_iter()
-        .map(|item| {
+        .enumerate()
+        .map(|(k, item)| {
             let raw = frame_scores(&item.table, weights);
             let skip = options
                 .skip_first
@@ -244,7 +329,12 @@ pub fn evaluate_dataset(
             let (scores, labels) =
                 metric_frames(&raw, &item.labels, skip, options.median_kernel)
                     .map_err(|e| ScoreError::Invalid(format!("{}: {e}", item.name)))?;
-            Ok((item, scores, labels))
+            Ok(Prepared {
+                item,
+                scores,
+                labels,
+                pixels: pixels.map(|p| &p[k]),
+            })
         })
         .collect::<Result<Vec<_>, ScoreError>>()?;
     let mut sources: Vec<&str> = Vec::new();
@@ -255,99 +345,111 @@ pub fn evaluate_dataset(
     }
     let mut rows = Vec::new();
     for source in sources {
-        let members: Vec<_> = prepared
+        let members: Vec<&Prepared> = prepared
             .iter()
-            .filter(|(m, _, _)| m.box_source == source)
-            .map(|(m, s, l)| (*m, s.clone(), l.clone()))
+            .filter(|p| p.item.box_source == source)
             .collect();
-        rows.push(group_row(source, None, &members)?);
-        let mut conditions: Vec<(Domain, Weather)> = Vec::new();
-        for (m, _, _) in &members {
-            if !conditions.contains(&(m.domain, m.weather)) {
-                conditions.push((m.domain, m.weather));
+        rows.push(group_row(source, (None, None), &members)?);
+        if grouping == Grouping::NONE {
+            continue;
+        }
+        let mut conditions: Vec<(Option<Domain>, Option<Weather>)> = Vec::new();
+        for m in &members {
+            let key = grouping.key_of(m.item);
+            if !conditions.contains(&key) {
+                conditions.push(key);
             }
         }
         conditions.sort_by_key(|&(d, w)| condition_order(d, w));
         for condition in conditions {
-            let group: Vec<_> = members
+            let group: Vec<&Prepared> = members
                 .iter()
-                .filter(|(m, _, _)| (m.domain, m.weather) == condition)
-                .cloned()
+                .filter(|m| grouping.key_of(m.item) == condition)
+                .copied()
                 .collect();
-            rows.push(group_row(source, Some(condition), &group)?);
+            rows.push(group_row(source, condition, &group)?);
         }
     }
     Ok(rows)
 }
 
-/// The table as aligned text, one row per line (metrics as percentages, `-` where a
-/// metric is undefined).
-pub fn format_eval_table(rows: &[EvalRow]) -> String {
-    let percent =
-        |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{:.1}", 100.0 * v));
-    let header = [
-        "box source",
-        "domain",
-        "weather",
-        "scen.",
-        "frames",
-        "anom.",
-        "AUROC",
-        "AUROC macro",
-        "AUPR",
-        "FPR95",
-        "FPR95 closest",
-        "mIoU",
-        "recall",
-    ];
-    let mut cells: Vec<Vec<String>> = vec![header.iter().map(|h| h.to_string()).collect()];
-    for r in rows {
-        let m = r.metrics;
-        cells.push(vec![
-            r.box_source.clone(),
-            r.domain
-                .map_or_else(|| "all".into(), |d| format!("{d:?}").to_lowercase()),
-            r.weather
-                .map_or_else(|| "all".into(), |w| format!("{w:?}").to_lowercase()),
-            r.scenarios.to_string(),
-            r.frames.to_string(),
-            r.anomalous_frames.to_string(),
-            percent(m.map(|m| m.auroc)),
-            percent(r.auroc_macro),
-            percent(m.map(|m| m.average_precision)),
-            percent(m.map(|m| m.fpr95)),
-            percent(m.map(|m| m.fpr95_closest)),
-            percent(r.mean_iou),
-            percent(r.box_recall),
-        ]);
-    }
-    let widths: Vec<usize> = (0..header.len())
-        .map(|c| {
-            cells
-                .iter()
-                .map(|row| row[c].chars().count())
-                .max()
-                .unwrap_or(0)
-        })
-        .collect();
-    let mut out = String::new();
-    for row in &cells {
-        let line: Vec<String> = row
-            .iter()
-            .zip(&widths)
-            .enumerate()
-            .map(|(c, (cell, &w))| {
-                if c < 3 {
-                    format!("{cell:<w$}")
-                } else {
-                    format!("{cell:>w$}")
-                }
+/// The values each of w_r and w_p takes in the weight study: the grid {0.1, 1, 10}², which
+/// holds all three presets (paper text 10 / 0.1, AD code 0.1 / 10, original 1 / 0.1).
+pub const SWEEP_VALUES: [f64; 3] = [0.1, 1.0, 10.0];
+
+/// The weight study's grid: every (w_r, w_p) of [`SWEEP_VALUES`], w_r outer, with the same
+/// pair at the pixel level (as every preset has).
+pub fn sweep_grid() -> Vec<FusionWeights> {
+    SWEEP_VALUES
+        .iter()
+        .flat_map(|&w_r| {
+            SWEEP_VALUES.iter().map(move |&w_p| FusionWeights {
+                w_r,
+                w_p,
+                w_r_p: w_r,
+                w_p_p: w_p,
             })
-            .collect();
-        out.push_str(line.join("  ").trim_end());
-        out.push('\n');
+        })
+        .collect()
+}
+
+/// One row of the weight study: the metrics over all scenarios of a box source for one
+/// set of weights.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SweepRow {
+    /// The weights of this row.
+    pub weights: FusionWeights,
+    /// The preset these weights are, if any ([`FusionWeights::PRESETS`]).
+    pub preset: Option<&'static str>,
+    /// The metrics (always over all domains and weathers).
+    pub row: EvalRow,
+}
+
+/// The weight study (the paper's Table 3): for every box source, one row per point of
+/// `grid` over all its scenarios, box sources in order of first appearance. `pixels`,
+/// when given, holds per grid point one [`PixelRoc`] per item, computed with that point's
+/// weights.
+pub fn sweep_weights(
+    items: &[ScenarioScores],
+    pixels: Option<&[Vec<PixelRoc>]>,
+    grid: &[FusionWeights],
+    options: &FrameMetricOptions,
+) -> Result<Vec<SweepRow>, ScoreError> {
+    if let Some(p) = pixels
+        && p.len() != grid.len()
+    {
+        return Err(ScoreError::Invalid(format!(
+            "pixel counts for {} weight points, the grid has {}",
+            p.len(),
+            grid.len()
+        )));
     }
-    out
+    let mut per_point = Vec::with_capacity(grid.len());
+    for (k, weights) in grid.iter().enumerate() {
+        let point_pixels = pixels.map(|p| p[k].as_slice());
+        per_point.push(evaluate_table(
+            items,
+            point_pixels,
+            weights,
+            options,
+            Grouping::NONE,
+        )?);
+    }
+    let sources = per_point.first().map_or(0, Vec::len);
+    let mut rows = Vec::with_capacity(sources * grid.len());
+    for source in 0..sources {
+        for (weights, point) in grid.iter().zip(&per_point) {
+            rows.push(SweepRow {
+                weights: *weights,
+                preset: FusionWeights::PRESETS
+                    .iter()
+                    .find(|(_, p)| p == weights)
+                    .map(|(name, _)| *name),
+                row: point[source].clone(),
+            });
+        }
+    }
+    Ok(rows)
 }
 
 /// Pixel scores and labels merged into score bins, for a ROC curve over any number of
@@ -489,6 +591,34 @@ pub fn add_scenario_pixels(
     mode: PixelReferenceMode,
     skip_first: usize,
 ) -> Result<usize, ScoreError> {
+    add_scenario_pixels_each(
+        std::slice::from_mut(roc),
+        scenario,
+        cache,
+        std::slice::from_ref(weights),
+        mode,
+        skip_first,
+    )
+}
+
+/// [`add_scenario_pixels`] for several weights at once: the heatmaps of `weights[k]` go to
+/// `rocs[k]`. Each frame's mask and maps are read once for all of them (what a weight
+/// study needs).
+pub fn add_scenario_pixels_each(
+    rocs: &mut [PixelRoc],
+    scenario: &Scenario,
+    cache: &ScoreCache,
+    weights: &[FusionWeights],
+    mode: PixelReferenceMode,
+    skip_first: usize,
+) -> Result<usize, ScoreError> {
+    if rocs.len() != weights.len() {
+        return Err(ScoreError::Invalid(format!(
+            "{} pixel accumulators for {} weights",
+            rocs.len(),
+            weights.len()
+        )));
+    }
     let table = cache.table();
     let mut heatmap = Heatmap::new(table.meta.frame_width, table.meta.frame_height);
     let mut scratch = HeatmapScratch::default();
@@ -498,8 +628,10 @@ pub fn add_scenario_pixels(
             continue;
         };
         let maps = cache.frame_maps(i)?;
-        compose_heatmap(table, i, &maps, weights, mode, &mut heatmap, &mut scratch)?;
-        roc.add(&heatmap, &mask)?;
+        for (roc, w) in rocs.iter_mut().zip(weights) {
+            compose_heatmap(table, i, &maps, w, mode, &mut heatmap, &mut scratch)?;
+            roc.add(&heatmap, &mask)?;
+        }
         added += 1;
     }
     Ok(added)

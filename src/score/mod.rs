@@ -14,13 +14,15 @@
 //! - [`score_scenario`]: the scoring run (cubes by `model::stc`, progress callback,
 //!   cancellation flag) writing a [`ScoreCache`] at [`CacheKey::path_in`];
 //!   [`score_scenario_with`] / [`run_scoring`] take any cube source and model.
-//! - [`ScoreCache::open`] / [`ScoreCache::lookup`]: the cache; [`ScoreTable`] is its
-//!   scalar part, [`ScoreCache::frame_maps`] reads one frame's maps.
+//! - [`ScoreCache::open`] / [`ScoreCache::lookup`] / [`ScoreCache::find`]: the cache;
+//!   [`ScoreTable`] is its scalar part, [`ScoreCache::frame_maps`] reads one frame's maps.
 //! - [`fusion::frame_scores`], [`fusion::metric_frames`], [`fusion::compose_heatmap`] with
 //!   [`FusionWeights`] (presets [`FusionWeights::PRESETS`]) and [`PixelReferenceMode`].
-//! - [`ScenarioScores::from_cache`] + [`evaluate_dataset`] + [`format_eval_table`]: the
-//!   table by box source and domain × weather (AUROC micro and macro, AP, FPR95, box IoU
-//!   and recall); [`PixelRoc`] + [`add_scenario_pixels`] for pixel-level metrics.
+//! - [`ScenarioScores::from_cache`] + [`evaluate_dataset`] / [`evaluate_table`]: the
+//!   table by box source and domain × weather (AUROC micro and macro, AP, FPR95, pixel
+//!   metrics, box IoU and recall); [`sweep_weights`] over [`sweep_grid`]: the weight study;
+//!   [`PixelRoc`] + [`add_scenario_pixels`] for pixel-level metrics; [`table`] renders the
+//!   rows as text, Markdown or CSV.
 
 pub mod boxes;
 pub mod cache;
@@ -31,18 +33,20 @@ pub mod flows;
 pub mod fusion;
 pub mod motion;
 pub mod run;
+pub mod table;
 
 pub use boxes::{
     BoxMatch, BoxMatchStats, BoxProvider, BoxSource, box_iou, match_boxes, match_scenario,
 };
 pub use cache::{
-    CacheKey, CacheWriter, FrameEntry, FrameState, ModelKey, ObjectMaps, ObjectScore,
+    CacheKey, CacheLookup, CacheWriter, FrameEntry, FrameState, ModelKey, ObjectMaps, ObjectScore,
     PixelReference, ScoreCache, ScoreMeta, ScoreTable, write_cache,
 };
 pub use detections::{DetectionFile, DetectionFormat, FrameNumbering};
 pub use error::ScoreError;
 pub use evaluate::{
-    EvalRow, PixelRoc, ScenarioScores, add_scenario_pixels, evaluate_dataset, format_eval_table,
+    EvalRow, Grouping, PixelRoc, SWEEP_VALUES, ScenarioScores, SweepRow, add_scenario_pixels,
+    add_scenario_pixels_each, evaluate_dataset, evaluate_table, sweep_grid, sweep_weights,
 };
 pub use flows::{FlowProvider, FlowSource};
 pub use fusion::{
@@ -54,3 +58,4 @@ pub use run::{
     CubeScorer, CubeSource, FrameBoxes, ScenarioCubes, ScoreProgress, ScoreRequest, ScoringPlan,
     run_scoring, score_scenario, score_scenario_with,
 };
+pub use table::{TableFormat, format_eval_table, render_eval_table, render_sweep_table};

@@ -12,4 +12,4 @@ pub mod stages;
 pub use config::{LrSchedule, StageConfig, TrainConfig};
 pub use cubes::CubeSet;
 pub use error::TrainError;
-pub use stages::{StageSummary, TrainEvent, TrainReport, train};
+pub use stages::{StageSummary, TrainEvent, TrainReport, train, train_from_checkpoint};

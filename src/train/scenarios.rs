@@ -14,7 +14,7 @@ use crate::sequence::{Scenario, discover_scenarios};
 use super::config::TrainConfig;
 use super::cubes::CubeSet;
 use super::error::TrainError;
-use super::stages::{TrainEvent, TrainReport, train};
+use super::stages::{TrainEvent, TrainReport, train, train_from_checkpoint};
 
 /// How cubes are taken from scenarios.
 #[derive(Debug, Clone, PartialEq)]
@@ -112,8 +112,13 @@ pub struct TrainRequest {
     pub model: ModelConfig,
     /// The training settings.
     pub train: TrainConfig,
+    /// How cubes are taken from the scenarios (patch and history must match `model`).
+    pub extraction: CubeExtraction,
     /// Reuse (or write) the extracted cubes here, e.g. `<out_dir>/cubes.safetensors`.
     pub cube_file: Option<PathBuf>,
+    /// Start from this vadscope checkpoint instead of random weights (its config must be
+    /// `model`).
+    pub initial: Option<PathBuf>,
 }
 
 /// Extracts (or loads) the cubes of `request.data` and trains on them; see
@@ -130,24 +135,30 @@ pub fn train_from_scenarios(
             if folders.is_empty() {
                 return Err(TrainError::Data("no scenario folders given".into()));
             }
-            let set = cubes_from_scenarios(
-                &folders,
-                &CubeExtraction::for_model(&request.model),
-                on_extract,
-            )?;
+            let set = cubes_from_scenarios(&folders, &request.extraction, on_extract)?;
             if let Some(path) = cube_file {
                 save_beside(path, &set)?;
             }
             set
         }
     };
-    train(
-        &request.model,
-        &request.train,
-        &cubes,
-        &request.out_dir,
-        on_event,
-    )
+    match &request.initial {
+        Some(initial) => train_from_checkpoint(
+            initial,
+            &request.model,
+            &request.train,
+            &cubes,
+            &request.out_dir,
+            on_event,
+        ),
+        None => train(
+            &request.model,
+            &request.train,
+            &cubes,
+            &request.out_dir,
+            on_event,
+        ),
+    }
 }
 
 fn save_beside(path: &Path, set: &CubeSet) -> Result<(), TrainError> {

@@ -27,7 +27,7 @@ use crate::model::layers::tensor;
 use crate::model::losses::{stage1_loss, stage2_loss, stage3_loss};
 use crate::model::{
     CheckpointMeta, Detector, Hf2Vad, Latents, ModelConfig, NoiseRng, StatsAccumulator,
-    TrainingStats, save_checkpoint,
+    TrainingStats, load_checkpoint, save_checkpoint,
 };
 
 use super::config::TrainConfig;
@@ -129,8 +129,41 @@ fn best_file(stage: usize) -> String {
 
 /// Trains a model of `model_config` on the normal cubes `data` through the three stages,
 /// writing checkpoints to `out_dir` and resuming from them when the folder holds an
-/// unfinished run of the same configuration.
+/// unfinished run of the same configuration. The weights start from the seeded random
+/// initialisation.
 pub fn train(
+    model_config: &ModelConfig,
+    train_config: &TrainConfig,
+    data: &CubeSet,
+    out_dir: &Path,
+    on_event: &mut dyn FnMut(&TrainEvent),
+) -> Result<TrainReport, TrainError> {
+    run_training(None, model_config, train_config, data, out_dir, on_event)
+}
+
+/// As [`train`], but the weights start from the vadscope checkpoint `initial` (whose config
+/// must be `model_config`), e.g. the result of a stage-1-only run before training stage 2.
+/// A resumed run continues from its own checkpoints instead.
+pub fn train_from_checkpoint(
+    initial: &Path,
+    model_config: &ModelConfig,
+    train_config: &TrainConfig,
+    data: &CubeSet,
+    out_dir: &Path,
+    on_event: &mut dyn FnMut(&TrainEvent),
+) -> Result<TrainReport, TrainError> {
+    run_training(
+        Some(initial),
+        model_config,
+        train_config,
+        data,
+        out_dir,
+        on_event,
+    )
+}
+
+fn run_training(
+    initial: Option<&Path>,
     model_config: &ModelConfig,
     train_config: &TrainConfig,
     data: &CubeSet,
@@ -181,6 +214,8 @@ pub fn train(
         .find(|p| p.is_file())
     {
         load_model(&mut model, &previous)?;
+    } else if let Some(initial) = initial {
+        model = initial_model(initial, model_config, &device)?;
     }
 
     let ctx = Context {
@@ -292,6 +327,22 @@ fn prepare_for_stage(mut model: Hf2Vad, stage: usize) -> Hf2Vad {
     model
 }
 
+/// The model of the vadscope checkpoint `path`, which must have been made with `config`.
+fn initial_model(path: &Path, config: &ModelConfig, device: &Device) -> Result<Hf2Vad, TrainError> {
+    let checkpoint = load_checkpoint(path, device)?;
+    if checkpoint.meta.config != *config {
+        return Err(TrainError::file(
+            path,
+            format!(
+                "the checkpoint's model config (preset '{}') differs from the one being \
+                 trained (preset '{}')",
+                checkpoint.meta.config.preset, config.preset
+            ),
+        ));
+    }
+    Ok(checkpoint.model)
+}
+
 fn load_model(model: &mut Hf2Vad, path: &Path) -> Result<(), TrainError> {
     let mut store = BurnpackStore::from_file(path);
     model
@@ -301,12 +352,27 @@ fn load_model(model: &mut Hf2Vad, path: &Path) -> Result<(), TrainError> {
 }
 
 fn save_model(model: &Hf2Vad, path: &Path) -> Result<(), TrainError> {
-    // valid() folds pending BatchNorm running-stat updates in and keeps parameter ids.
-    let mut store = BurnpackStore::from_file(path).overwrite(true);
-    model
-        .valid()
-        .save_into(&mut store)
-        .map_err(|e| TrainError::file(path, e))
+    replace_file(path, |scratch| {
+        // valid() folds pending BatchNorm running-stat updates in and keeps parameter ids.
+        let mut store = BurnpackStore::from_file(scratch).overwrite(true);
+        model
+            .valid()
+            .save_into(&mut store)
+            .map_err(|e| TrainError::file(scratch, e))
+    })
+}
+
+/// Writes `path` through a scratch file renamed into place, so an interrupted run never
+/// leaves a half-written checkpoint behind. The scratch name keeps the `.bpk` extension,
+/// which burnpack would otherwise append.
+fn replace_file(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), TrainError>,
+) -> Result<(), TrainError> {
+    let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+    let scratch = path.with_file_name(format!("{stem}.partial.bpk"));
+    write(&scratch)?;
+    std::fs::rename(&scratch, path).map_err(|e| TrainError::io(path, e))
 }
 
 fn read_state(dir: &Path) -> Result<Option<TrainState>, TrainError> {
@@ -418,10 +484,11 @@ impl Context<'_> {
                 save_model(&model, &self.out_dir.join(best_file(stage)))?;
             }
             save_model(&model, &self.out_dir.join(LAST_MODEL))?;
-            let optim_path = self.out_dir.join(LAST_OPTIM);
-            optim
-                .save(&optim_path)
-                .map_err(|e| TrainError::file(&optim_path, e))?;
+            replace_file(&self.out_dir.join(LAST_OPTIM), |scratch| {
+                optim
+                    .save(scratch)
+                    .map_err(|e| TrainError::file(scratch, e))
+            })?;
             state.next_epoch = epoch + 1;
             state.rng_state = rng.state();
             state.summaries[stage - 1] = Some(StageSummary {

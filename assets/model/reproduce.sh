@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Reproduces the bundled model assets/model/hf2vad_ad_compact.safetensors: generates the
+# normal-driving training scenarios, trains the compact HF²-VAD_AD on them with
+# `vadscope train`, and copies the final checkpoint here. MODEL.md records the run.
+# Usage: bash assets/model/reproduce.sh [WORK_DIR]   (default /tmp/vadscope-bundled; it must
+# not hold an earlier run)
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+work="${1:-/tmp/vadscope-bundled}"
+cd "$here/../.."
+cargo build --release --quiet
+vadscope=target/release/vadscope
+"$vadscope" generate --out "$work/data" --preset train --count 8 --frames 20 --size 384x256 \
+  --seed 0 --omit depth,semantic,instance
+"$vadscope" train --data "$work/data" --out "$work/run" --preset compact --seed 0 \
+  --frame-stride 5 --memae-epochs 2 --cvae-epochs 1 --finetune-epochs 0 --batch 32 \
+  --memae-lr 1e-3 --cvae-lr 1e-3
+cp "$work/run/model.safetensors" "$here/hf2vad_ad_compact.safetensors"

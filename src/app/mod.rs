@@ -1,0 +1,64 @@
+//! The desktop viewer: an egui/eframe application over a GUI-free core.
+//!
+//! The core ([`AppState`]) holds the open data set ([`Dataset`]), the current scenario and
+//! frame ([`Playback`]), the analyst's settings ([`ViewSettings`]), fused scores and live
+//! metrics ([`ScenarioAnalysis`], [`DatasetMetrics`]), ranked failure cases with tags
+//! ([`FailureCase`]), the background scoring job ([`ScoringJob`]) and the log. It is driven
+//! by [`Action`]s and setting changes and is tested without a display.
+//!
+//! [`ui`] draws panels over it (scenario browser, main view, timeline, weights and
+//! metrics, failure cases, object inspector, log, help) and turns keys and clicks into
+//! actions; the views themselves are images drawn by `render`. [`Layout`] keeps panel
+//! sizes, settings and recent data sets between runs. [`run`] opens the window.
+
+pub mod analysis;
+pub mod dataset;
+pub mod error;
+pub mod failures;
+pub mod jobs;
+pub mod layout;
+pub mod playback;
+pub mod settings;
+pub mod state;
+pub mod ui;
+
+use std::path::PathBuf;
+
+pub use analysis::{DatasetMetrics, FusionParams, ScenarioAnalysis};
+pub use dataset::{Dataset, ScenarioEntry, ScoreStatus, Scores};
+pub use error::AppError;
+pub use failures::{FailureCase, FailureKind, FailureTags, TagKey};
+pub use jobs::{JobEvent, ScoringJob, ScoringSetup};
+pub use layout::Layout;
+pub use playback::Playback;
+pub use settings::{Overlay, Overlays, ThresholdMode, ViewMode, ViewSettings};
+pub use state::{Action, AppState, FrameInfo, LogEntry, LogLevel, ObjectInfo};
+pub use ui::ViewerApp;
+
+/// What the viewer opens with.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ViewerOptions {
+    /// A scenario or data-set root to open at start.
+    pub path: Option<PathBuf>,
+    /// Model, boxes and flows to score with.
+    pub setup: ScoringSetup,
+    /// Where the layout is kept; `None` = not kept.
+    pub layout_file: Option<PathBuf>,
+}
+
+/// Opens the viewer window and runs it until it is closed.
+pub fn run(options: ViewerOptions) -> Result<(), AppError> {
+    let native = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_title("vadscope")
+            .with_inner_size([1400.0, 900.0])
+            .with_drag_and_drop(true),
+        ..Default::default()
+    };
+    eframe::run_native(
+        "vadscope",
+        native,
+        Box::new(move |cc| Ok(Box::new(ViewerApp::new(&cc.egui_ctx, options)))),
+    )
+    .map_err(|e| AppError::Window(e.to_string()))
+}

@@ -1,0 +1,143 @@
+//! The main view: the image `render` draws for the current frame and view (frame with
+//! overlays, predicted vs actual, flow vs reconstruction), scaled to fit, with the view and
+//! overlay switches above it; hovering a box shows its scores, clicking selects it for the
+//! inspector; the shown image exports as PNG.
+
+use image::RgbaImage;
+
+use crate::app::settings::{Overlay, ViewMode, ViewSettings};
+use crate::app::state::{Action, AppState, LogLevel};
+
+use super::texture::CachedTexture;
+use super::views::{self, FrameKey, ViewImage};
+
+/// The main view's own state: the texture, the image it holds (for export) and where the
+/// camera frame sits in it.
+pub struct MainView {
+    texture: CachedTexture<FrameKey>,
+    shown: Option<ViewImage>,
+}
+
+impl Default for MainView {
+    fn default() -> Self {
+        Self {
+            texture: CachedTexture::new("main view"),
+            shown: None,
+        }
+    }
+}
+
+impl MainView {
+    /// Draws the view, editing `settings` (view mode and overlays).
+    pub fn show(&mut self, ui: &mut egui::Ui, state: &mut AppState, settings: &mut ViewSettings) {
+        ui.horizontal_wrapped(|ui| {
+            for (i, mode) in ViewMode::ALL.into_iter().enumerate() {
+                ui.selectable_value(
+                    &mut settings.view,
+                    mode,
+                    format!("{} {}", i + 1, mode.name()),
+                );
+            }
+            ui.separator();
+            for overlay in Overlay::ALL {
+                let mut on = settings.overlays.is_on(overlay);
+                if ui.checkbox(&mut on, overlay.name()).changed() {
+                    settings.overlays.toggle(overlay);
+                }
+            }
+        });
+        if state.entry().is_none() {
+            ui.centered_and_justified(|ui| {
+                ui.label(
+                    "Open a scenario or data set: File > Open (Ctrl+O), or drop a folder here.",
+                );
+            });
+            return;
+        }
+        let ppp = ui.ctx().pixels_per_point();
+        let avail = ui.available_size();
+        let size = (
+            (avail.x * ppp).clamp(64.0, 4096.0) as u32,
+            (avail.y * ppp).clamp(48.0, 4096.0) as u32,
+        );
+        let key = FrameKey::of(state, size);
+        let mut problem = None;
+        let texture = self
+            .texture
+            .get(ui.ctx(), key, || match views::main_image(state, size) {
+                Ok(view) => {
+                    let image = view.as_ref().map(|v| v.image.clone());
+                    self.shown = view;
+                    image
+                }
+                Err(e) => {
+                    problem = Some(e.to_string());
+                    self.shown = None;
+                    None
+                }
+            });
+        let Some(texture) = texture.cloned() else {
+            if let Some(problem) = problem {
+                state.log(LogLevel::Error, problem);
+            }
+            ui.centered_and_justified(|ui| {
+                ui.label("This frame could not be drawn (see the log).")
+            });
+            return;
+        };
+        let response = ui.add(
+            egui::Image::new((texture.id(), egui::vec2(size.0 as f32, size.1 as f32) / ppp))
+                .sense(egui::Sense::click()),
+        );
+        self.pointer(state, &response, ppp);
+    }
+
+    /// Hover tooltip and click selection of the box under the pointer.
+    fn pointer(&self, state: &mut AppState, response: &egui::Response, ppp: f32) {
+        let Some(view) = &self.shown else {
+            return;
+        };
+        let Some(pos) = response.hover_pos() else {
+            return;
+        };
+        let local = (pos - response.rect.min) * ppp;
+        let Some((x, y)) = view.frame_pixel(local.x, local.y) else {
+            return;
+        };
+        let object = state.object_at(x, y);
+        if response.clicked() {
+            state.apply(Action::SelectObject(object.map(|o| o.track_id)));
+        }
+        if let Some(o) = object {
+            response.clone().on_hover_ui_at_pointer(|ui| {
+                ui.monospace(format!(
+                    "track {}  score {:.2}\nS_r {:.3} (z {:.2})  S_p {:.4} (z {:.2})",
+                    o.track_id, o.score, o.s_r, o.z_r, o.s_p, o.z_p
+                ));
+            });
+        }
+    }
+
+    /// Asks where to write the shown image and writes it as PNG.
+    pub fn export_png(&self, state: &mut AppState) {
+        let Some(view) = &self.shown else {
+            state.log(LogLevel::Warning, "nothing to export: no view is shown");
+            return;
+        };
+        let name = format!("frame_{:05}.png", state.frame());
+        let Some(path) = rfd::FileDialog::new().set_file_name(name).save_file() else {
+            return;
+        };
+        save_png(state, &view.image, &path);
+    }
+}
+
+fn save_png(state: &mut AppState, image: &RgbaImage, path: &std::path::Path) {
+    match image.save(path) {
+        Ok(()) => state.log(
+            LogLevel::Info,
+            format!("view written to {}", path.display()),
+        ),
+        Err(e) => state.log(LogLevel::Error, format!("{}: {e}", path.display())),
+    }
+}

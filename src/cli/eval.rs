@@ -1,0 +1,273 @@
+//! `vadscope eval`: scores whatever is not cached yet (as `vadscope score` does), then
+//! prints the paper's Table 2 (rows per box source and per condition: frame AUROC micro and
+//! macro, AUPR, FPR95, pixel metrics with `--pixel`, box IoU against the ground truth) and,
+//! with `--sweep`, Table 3 (the weight study), as Markdown, text, CSV or JSON.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context, bail};
+use clap::{Args, ValueEnum};
+use rayon::prelude::*;
+use serde::Serialize;
+use vadscope::score::{
+    BoxSource, EvalRow, FrameMetricOptions, FusionWeights, Grouping, PixelReferenceMode, PixelRoc,
+    ScenarioScores, ScoreCache, SweepRow, TableFormat, add_scenario_pixels_each, evaluate_table,
+    render_eval_table, render_sweep_table, sweep_grid, sweep_weights,
+};
+use vadscope::sequence::Scenario;
+
+use super::score::{Report, RunArgs, Scorer, open_scenarios, parse_box_source};
+use super::score_cache::{PresetArg, parse_weights};
+
+/// Options of `vadscope eval`.
+#[derive(Debug, Args)]
+pub struct EvalArgs {
+    /// A data-set root holding `Scenario_*` folders (or a single scenario folder).
+    #[arg(value_name = "DATASET")]
+    dataset: PathBuf,
+    #[command(flatten)]
+    run: RunArgs,
+    /// Box sources to evaluate, comma-separated, each as `vadscope score --boxes` takes it
+    /// (e.g. `gt,motion`).
+    #[arg(long, default_value = "gt", value_name = "gt,motion,...", value_delimiter = ',', value_parser = parse_box_source)]
+    boxes: Vec<BoxSource>,
+    /// Fusion weights w_r,w_p,w_r_p,w_p_p (frame level, then pixel level). Default: the
+    /// HF²-VAD_AD paper text, 10,0.1,10,0.1.
+    #[arg(long, value_name = "wr,wp,wrp,wpp", value_parser = parse_weights, conflicts_with = "preset")]
+    weights: Option<FusionWeights>,
+    /// A weight preset: `paper-text` (10 / 0.1), `ad-code` or `paper-code` (the AD code's
+    /// 0.1 / 10), `original` (HF²-VAD's 1 / 0.1).
+    #[arg(long, value_enum)]
+    preset: Option<PresetArg>,
+    /// Median-filter kernel over each scenario's frame scores (0 or 1: no filter).
+    #[arg(long, default_value_t = 17, value_name = "K")]
+    median: usize,
+    /// Conditions that get rows of their own, comma-separated: `domain`, `weather`, both
+    /// (one row per domain × weather), or `none` (only the row over all scenarios).
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "domain,weather"
+    )]
+    by: Vec<ByKey>,
+    /// Also print the weight study (Table 3): one row per (w_r, w_p) of the grid
+    /// {0.1, 1, 10}², the pixel weights equal to the frame weights.
+    #[arg(long)]
+    sweep: bool,
+    /// Also compute pixel-level metrics (AUROC, AUPR, FPR95) of the full-resolution heatmaps
+    /// against the anomaly masks (SEMANTIC_IMG).
+    #[arg(long)]
+    pixel: bool,
+    /// Statistics that robust-scale the pixel error maps: the model's training cubes, the
+    /// scored scenario, or the reference code's per-batch statistics.
+    #[arg(long, value_enum, default_value = "training")]
+    pixel_reference: PixelReferenceArg,
+    /// IoU at which a scored box counts as finding a ground-truth box.
+    #[arg(long, default_value_t = 0.5, value_name = "IOU")]
+    iou: f32,
+    /// Output format.
+    #[arg(long, value_enum, default_value = "md")]
+    format: FormatArg,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ByKey {
+    Domain,
+    Weather,
+    None,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum PixelReferenceArg {
+    Training,
+    Scenario,
+    Reference,
+}
+
+impl PixelReferenceArg {
+    fn mode(self) -> PixelReferenceMode {
+        match self {
+            Self::Training => PixelReferenceMode::Training,
+            Self::Scenario => PixelReferenceMode::Scenario,
+            Self::Reference => PixelReferenceMode::ReferenceBatches,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum FormatArg {
+    Md,
+    Text,
+    Csv,
+    Json,
+}
+
+/// What `--format json` prints.
+#[derive(Serialize)]
+struct JsonReport<'a> {
+    weights: FusionWeights,
+    median_kernel: usize,
+    grouping: Grouping,
+    table2: &'a [EvalRow],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    table3: Option<&'a [SweepRow]>,
+}
+
+/// One scored scenario for one box source.
+struct Scored<'a> {
+    scenario: &'a Scenario,
+    cache: ScoreCache,
+}
+
+/// Per scored scenario, one pixel accumulator per weights of `weights`.
+fn pixel_counts(
+    scored: &[Scored],
+    weights: &[FusionWeights],
+    mode: PixelReferenceMode,
+) -> anyhow::Result<Vec<Vec<PixelRoc>>> {
+    scored
+        .par_iter()
+        .map(|s| {
+            let mut rocs = vec![PixelRoc::new(); weights.len()];
+            let skip = s.cache.table().meta.clip_hist as usize;
+            let frames =
+                add_scenario_pixels_each(&mut rocs, s.scenario, &s.cache, weights, mode, skip)
+                    .with_context(|| format!("pixel metrics of {}", s.scenario.root().display()))?;
+            if frames == 0 {
+                eprintln!(
+                    "{}: no anomaly masks (SEMANTIC_IMG), no pixel metrics",
+                    s.scenario.name()
+                );
+            }
+            Ok(rocs)
+        })
+        .collect()
+}
+
+/// Runs `vadscope eval`.
+pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
+    if args.by.contains(&ByKey::None) && args.by.len() > 1 {
+        bail!("--by none cannot be combined with domain or weather");
+    }
+    if !(args.iou > 0.0 && args.iou <= 1.0) {
+        bail!("--iou {} must lie in (0, 1]", args.iou);
+    }
+    let grouping = Grouping {
+        domain: args.by.contains(&ByKey::Domain),
+        weather: args.by.contains(&ByKey::Weather),
+    };
+    let weights = args
+        .weights
+        .or(args.preset.map(PresetArg::weights))
+        .unwrap_or_default();
+    let options = FrameMetricOptions {
+        median_kernel: args.median,
+        skip_first: None,
+    };
+    let mut sources: Vec<BoxSource> = Vec::new();
+    for source in args.boxes {
+        if !sources.contains(&source) {
+            sources.push(source);
+        }
+    }
+
+    let scenarios = open_scenarios(std::slice::from_ref(&args.dataset))?;
+    let mut scorer = Scorer::new(&args.run, Report::Stderr)?;
+    let mut items = Vec::new();
+    let mut scored = Vec::new();
+    for source in &sources {
+        for scenario in &scenarios {
+            let cache = scorer.cache_for(scenario, source, false)?;
+            items.push(ScenarioScores::from_table(
+                scenario,
+                source.label(),
+                cache.table().clone(),
+                Some(args.iou),
+            )?);
+            scored.push(Scored { scenario, cache });
+        }
+    }
+
+    // Pixel counts per weights point: the table's weights first, then the sweep grid.
+    let grid = if args.sweep { sweep_grid() } else { Vec::new() };
+    let (table_pixels, grid_pixels) = if args.pixel {
+        let points: Vec<FusionWeights> = std::iter::once(weights).chain(grid.clone()).collect();
+        let per_item = pixel_counts(&scored, &points, args.pixel_reference.mode())?;
+        let per_point: Vec<Vec<PixelRoc>> = (0..points.len())
+            .map(|k| per_item.iter().map(|rocs| rocs[k].clone()).collect())
+            .collect();
+        let (first, rest) = per_point.split_first().expect("one point at least");
+        (Some(first.clone()), Some(rest.to_vec()))
+    } else {
+        (None, None)
+    };
+    let rows = evaluate_table(
+        &items,
+        table_pixels.as_deref(),
+        &weights,
+        &options,
+        grouping,
+    )?;
+    let sweep = if args.sweep {
+        Some(sweep_weights(
+            &items,
+            grid_pixels.as_deref(),
+            &grid,
+            &options,
+        )?)
+    } else {
+        None
+    };
+
+    let format = match args.format {
+        FormatArg::Json => {
+            let report = JsonReport {
+                weights,
+                median_kernel: args.median,
+                grouping,
+                table2: &rows,
+                table3: sweep.as_deref(),
+            };
+            println!("{}", serde_json::to_string_pretty(&report)?);
+            return Ok(ExitCode::SUCCESS);
+        }
+        FormatArg::Md => TableFormat::Markdown,
+        FormatArg::Text => TableFormat::Text,
+        FormatArg::Csv => TableFormat::Csv,
+    };
+    let heading = |title: &str| {
+        if format == TableFormat::Csv {
+            String::new()
+        } else {
+            format!("{title}\n\n")
+        }
+    };
+    print!(
+        "{}{}",
+        heading(&format!(
+            "Table 2: frame metrics{} by box source and condition (w_r {}, w_p {}, w_r_p {}, w_p_p {}; median filter {}; first {} frames of each scenario skipped; AUROC micro over all frames, macro = mean over scenarios; FPR95 at the first threshold reaching TPR 0.95; mIoU and recall of ground-truth boxes at IoU {})",
+            if args.pixel { " and pixel metrics" } else { "" },
+            weights.w_r,
+            weights.w_p,
+            weights.w_r_p,
+            weights.w_p_p,
+            args.median,
+            items.first().map_or(0, |i| i.table.meta.clip_hist),
+            args.iou
+        )),
+        render_eval_table(&rows, format)
+    );
+    if let Some(sweep) = &sweep {
+        println!();
+        print!(
+            "{}{}",
+            heading(
+                "Table 3: the weight study over (w_r, w_p) in {0.1, 1, 10}², pixel weights equal to the frame weights, all scenarios of each box source"
+            ),
+            render_sweep_table(sweep, format)
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}

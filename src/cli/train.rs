@@ -1,0 +1,434 @@
+//! `vadscope train`: turns the command line into a [`TrainRequest`], runs the three training
+//! stages with progress bars and per-epoch lines, and prints where the checkpoint went.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, bail};
+use clap::{Args, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use vadscope::model::{ModelConfig, TrainingStats, read_checkpoint_meta};
+use vadscope::train::scenarios::{
+    CubeExtraction, TrainRequest, scenario_folders, train_from_scenarios,
+};
+use vadscope::train::{StageSummary, TrainConfig, TrainEvent, TrainReport};
+
+/// Name of the extracted-cube cache inside the output folder.
+const CUBE_FILE: &str = "cubes.safetensors";
+/// Name of the resume state inside the output folder (written by the library).
+const STATE_FILE: &str = "state.json";
+
+/// Options of `vadscope train`.
+#[derive(Debug, Args)]
+pub struct TrainArgs {
+    /// Scenario folders, or folders holding `Scenario_*` folders, of normal driving (e.g. the
+    /// output of `vadscope generate --preset train`). Repeat or list several.
+    #[arg(long, required = true, num_args = 1..)]
+    data: Vec<PathBuf>,
+    /// Output folder: extracted cubes (`cubes.safetensors`), per-epoch checkpoints
+    /// (`last_model.bpk`, `stageN_best.bpk`), the resume state (`state.json`) and the final
+    /// checkpoint with training statistics (`model.safetensors`).
+    #[arg(long)]
+    out: PathBuf,
+    /// Which stage to train: `memae` (1: ML-MemAE-SC on the last flow), `cvae` (2: the CVAE
+    /// with ML-MemAE-SC frozen), `finetune` (3: everything together) or `all` three in order.
+    /// The stages not chosen run for 0 epochs.
+    #[arg(long, value_enum, default_value_t = StageArg::All)]
+    stage: StageArg,
+    /// Model sizes: `compact` (the bundled CPU model, ≈ 9.9 M parameters; the default) or
+    /// `paper` (the reference configuration, 69 M parameters).
+    #[arg(long, value_enum, value_name = "compact|paper")]
+    preset: Option<PresetArg>,
+    /// Start from this vadscope checkpoint instead of random weights, with its model config
+    /// (e.g. `--stage cvae --init RUN1/model.safetensors` after a `--stage memae` run RUN1).
+    #[arg(long, value_name = "CHECKPOINT", conflicts_with_all = ["preset", "model_config"])]
+    init: Option<PathBuf>,
+    /// Model sizes as JSON (a `ModelConfig`: patch size, widths, memory slots, ...) instead
+    /// of a preset.
+    #[arg(long, value_name = "FILE", conflicts_with = "preset")]
+    model_config: Option<PathBuf>,
+    /// Training settings as JSON (a `TrainConfig`: per-stage epochs, batch sizes, learning
+    /// rates and schedules, Adam ε, loss weights, seed, validation split). Options given on
+    /// the command line override it. Default: the reference's schedules.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Epochs of every chosen stage (reference: 80).
+    #[arg(long, value_name = "N")]
+    epochs: Option<usize>,
+    /// Epochs of stage 1 (overrides --epochs).
+    #[arg(long, value_name = "N")]
+    memae_epochs: Option<usize>,
+    /// Epochs of stage 2 (overrides --epochs).
+    #[arg(long, value_name = "N")]
+    cvae_epochs: Option<usize>,
+    /// Epochs of stage 3 (overrides --epochs).
+    #[arg(long, value_name = "N")]
+    finetune_epochs: Option<usize>,
+    /// Batch size of every stage (reference: 256 flows in stage 1, 128 cubes in 2 and 3).
+    #[arg(long, value_name = "B")]
+    batch: Option<usize>,
+    /// Batch size of stage 1 (overrides --batch).
+    #[arg(long, value_name = "B")]
+    memae_batch: Option<usize>,
+    /// Batch size of stage 2 (overrides --batch).
+    #[arg(long, value_name = "B")]
+    cvae_batch: Option<usize>,
+    /// Batch size of stage 3 (overrides --batch).
+    #[arg(long, value_name = "B")]
+    finetune_batch: Option<usize>,
+    /// Base learning rate of stage 1 (reference 1e-4).
+    #[arg(long, value_name = "LR")]
+    memae_lr: Option<f64>,
+    /// Base learning rate of stage 2 (reference 1e-4).
+    #[arg(long, value_name = "LR")]
+    cvae_lr: Option<f64>,
+    /// Base learning rate of stage 3 (reference 8e-5).
+    #[arg(long, value_name = "LR")]
+    finetune_lr: Option<f64>,
+    /// Stop every epoch after this many optimiser steps (default: a full pass).
+    #[arg(long, value_name = "N")]
+    max_steps: Option<usize>,
+    /// Fraction of the scenarios held out as normal validation data for model selection
+    /// (default 0.1; at least one scenario when there are several).
+    #[arg(long, value_name = "F")]
+    val_fraction: Option<f64>,
+    /// Batch size of the validation and statistics passes (default 64).
+    #[arg(long, value_name = "B")]
+    eval_batch: Option<usize>,
+    /// Seed of initialisation, shuffling, dropout, latent noise and the split (default 0).
+    #[arg(long, value_name = "S")]
+    seed: Option<u64>,
+    /// Use every n-th frame of each scenario as a cube target (default 1: every frame).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    frame_stride: usize,
+    /// Worker threads of the CPU backend (default: all cores).
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+    /// Continue the unfinished run in --out from its last finished epoch (same options
+    /// required); the cubes are read back from the output folder.
+    #[arg(long)]
+    resume: bool,
+}
+
+/// The stages `--stage` can choose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum StageArg {
+    Memae,
+    Cvae,
+    Finetune,
+    All,
+}
+
+impl StageArg {
+    /// Whether stage `n` (1–3) runs.
+    fn includes(self, n: usize) -> bool {
+        match self {
+            StageArg::Memae => n == 1,
+            StageArg::Cvae => n == 2,
+            StageArg::Finetune => n == 3,
+            StageArg::All => true,
+        }
+    }
+}
+
+/// The model presets `--preset` can choose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum PresetArg {
+    Compact,
+    Paper,
+}
+
+impl PresetArg {
+    fn config(self) -> ModelConfig {
+        match self {
+            PresetArg::Compact => ModelConfig::compact(),
+            PresetArg::Paper => ModelConfig::paper(),
+        }
+    }
+}
+
+/// The training settings: `--config` (or the defaults), then the command-line overrides.
+fn train_config(args: &TrainArgs) -> anyhow::Result<TrainConfig> {
+    let mut config = match &args.config {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            serde_json::from_str(&text)
+                .with_context(|| format!("{} is not a valid training config", path.display()))?
+        }
+        None => TrainConfig::default(),
+    };
+    let per_stage = [
+        (args.memae_epochs, args.memae_batch, args.memae_lr),
+        (args.cvae_epochs, args.cvae_batch, args.cvae_lr),
+        (args.finetune_epochs, args.finetune_batch, args.finetune_lr),
+    ];
+    for (i, (epochs, batch, lr)) in per_stage.into_iter().enumerate() {
+        let stage = match i {
+            0 => &mut config.stage1,
+            1 => &mut config.stage2,
+            _ => &mut config.stage3,
+        };
+        if let Some(e) = epochs.or(args.epochs) {
+            stage.epochs = e;
+        }
+        if !args.stage.includes(i + 1) {
+            stage.epochs = 0;
+        }
+        if let Some(b) = batch.or(args.batch) {
+            stage.batch_size = b;
+        }
+        if let Some(lr) = lr {
+            stage.lr = lr;
+        }
+        if args.max_steps.is_some() {
+            stage.max_steps_per_epoch = args.max_steps;
+        }
+    }
+    if let Some(f) = args.val_fraction {
+        config.val_fraction = f;
+    }
+    if let Some(b) = args.eval_batch {
+        config.eval_batch = b;
+    }
+    if let Some(s) = args.seed {
+        config.seed = s;
+    }
+    Ok(config)
+}
+
+/// A model config read from a JSON file and checked.
+fn model_config(path: &Path) -> anyhow::Result<ModelConfig> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let config: ModelConfig = serde_json::from_str(&text)
+        .with_context(|| format!("{} is not a valid model config", path.display()))?;
+    config
+        .validate()
+        .with_context(|| format!("{} is not a usable model config", path.display()))?;
+    Ok(config)
+}
+
+/// Makes sure `out` exists and can be written before any expensive work starts.
+fn check_out_dir(out: &Path) -> anyhow::Result<()> {
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("cannot create the output folder {}", out.display()))?;
+    let probe = out.join(".vadscope-write-test");
+    std::fs::write(&probe, b"")
+        .with_context(|| format!("the output folder {} is not writable", out.display()))?;
+    std::fs::remove_file(&probe).with_context(|| format!("cannot clean up {}", probe.display()))?;
+    Ok(())
+}
+
+/// Refuses to start over an existing run without `--resume`, and to resume nothing.
+fn check_resume(out: &Path, resume: bool) -> anyhow::Result<()> {
+    let started = out.join(STATE_FILE).is_file() || out.join(CUBE_FILE).is_file();
+    if resume && !started {
+        bail!(
+            "{} holds no run to resume (no {STATE_FILE} or {CUBE_FILE})",
+            out.display()
+        );
+    }
+    if !resume && started {
+        bail!(
+            "{} already holds a training run; pass --resume to continue it or choose an \
+             empty folder",
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+/// Runs `vadscope train`.
+pub fn run(args: TrainArgs) -> anyhow::Result<ExitCode> {
+    if let Some(n) = args.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .context("cannot set up the worker threads")?;
+    }
+    let model = match (&args.init, &args.model_config) {
+        (Some(path), _) => read_checkpoint_meta(path)?.config,
+        (None, Some(path)) => model_config(path)?,
+        (None, None) => args.preset.unwrap_or(PresetArg::Compact).config(),
+    };
+    let train = train_config(&args)?;
+    if args.frame_stride == 0 {
+        bail!("--frame-stride must be at least 1");
+    }
+    let cube_file = args.out.join(CUBE_FILE);
+    if !cube_file.is_file() {
+        let folders = scenario_folders(&args.data)?;
+        println!(
+            "{} scenarios under {}",
+            folders.len(),
+            args.data
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    check_out_dir(&args.out)?;
+    check_resume(&args.out, args.resume)?;
+    let request = TrainRequest {
+        data: args.data.clone(),
+        out_dir: args.out.clone(),
+        extraction: CubeExtraction {
+            frame_stride: args.frame_stride,
+            ..CubeExtraction::for_model(&model)
+        },
+        model,
+        train,
+        cube_file: Some(cube_file),
+        initial: args.init.clone(),
+    };
+
+    let extract_bar = bar("{prefix:>12} [{bar:40}] {pos}/{len} scenarios ({elapsed})");
+    extract_bar.set_prefix("cubes");
+    let mut progress = Progress::default();
+    let report = train_from_scenarios(
+        &request,
+        &mut |event| progress.on_event(event),
+        &mut |done, total| {
+            extract_bar.set_length(total as u64);
+            extract_bar.set_position(done as u64);
+        },
+    )?;
+    extract_bar.finish_and_clear();
+    progress.finish();
+    print_report(&report);
+    Ok(ExitCode::SUCCESS)
+}
+
+fn bar(template: &str) -> ProgressBar {
+    ProgressBar::new(0).with_style(
+        ProgressStyle::with_template(template)
+            .expect("static progress template")
+            .progress_chars("=> "),
+    )
+}
+
+fn stage_name(stage: usize) -> &'static str {
+    match stage {
+        1 => "memae",
+        2 => "cvae",
+        _ => "finetune",
+    }
+}
+
+/// The progress bar of the running stage and the per-epoch lines.
+#[derive(Default)]
+struct Progress {
+    bar: Option<ProgressBar>,
+    epochs: usize,
+    steps_per_epoch: usize,
+}
+
+impl Progress {
+    fn on_event(&mut self, event: &TrainEvent) {
+        match *event {
+            TrainEvent::StageStarted {
+                stage,
+                first_epoch,
+                epochs,
+                steps_per_epoch,
+            } => {
+                self.finish();
+                self.epochs = epochs;
+                self.steps_per_epoch = steps_per_epoch;
+                let bar =
+                    bar("{prefix:>12} [{bar:40}] {pos}/{len} steps ({per_sec}, eta {eta}) {msg}");
+                bar.set_prefix(format!("stage {stage} {}", stage_name(stage)));
+                bar.set_length((epochs * steps_per_epoch) as u64);
+                bar.set_position((first_epoch * steps_per_epoch) as u64);
+                if first_epoch > 0 {
+                    bar.suspend(|| {
+                        println!("stage {stage}: resuming at epoch {}", first_epoch + 1)
+                    });
+                }
+                self.bar = Some(bar);
+            }
+            TrainEvent::Step {
+                epoch, step, loss, ..
+            } => {
+                if let Some(bar) = &self.bar {
+                    bar.set_position((epoch * self.steps_per_epoch + step + 1) as u64);
+                    bar.set_message(format!(
+                        "epoch {}/{} loss {loss:.5}",
+                        epoch + 1,
+                        self.epochs
+                    ));
+                }
+            }
+            TrainEvent::EpochDone {
+                stage,
+                epoch,
+                train_loss,
+                val_loss,
+                lr,
+                best,
+            } => {
+                let val = val_loss.map_or("-".to_string(), |v| format!("{v:.6}"));
+                let line = format!(
+                    "stage {stage} {} epoch {}/{}: train loss {train_loss:.6}, validation loss \
+                     {val}, lr {lr:.2e}{}",
+                    stage_name(stage),
+                    epoch + 1,
+                    self.epochs,
+                    if best { " (best)" } else { "" }
+                );
+                match &self.bar {
+                    Some(bar) => bar.suspend(|| println!("{line}")),
+                    None => println!("{line}"),
+                }
+            }
+            TrainEvent::StatsDone(stats) => {
+                self.finish();
+                print_stats(&stats);
+            }
+        }
+    }
+
+    fn finish(&mut self) {
+        if let Some(bar) = self.bar.take() {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+fn print_stats(stats: &TrainingStats) {
+    println!(
+        "training statistics over {} cubes: S_r mean {:.4} std {:.4}; S_p mean {:.4} std {:.4}",
+        stats.cubes,
+        stats.flow_score.mean,
+        stats.flow_score.std,
+        stats.frame_score.mean,
+        stats.frame_score.std
+    );
+}
+
+fn print_report(report: &TrainReport) {
+    println!(
+        "{} training cubes, {} validation cubes",
+        report.split.0, report.split.1
+    );
+    for (i, summary) in report.stages.iter().enumerate() {
+        if let Some(StageSummary {
+            epochs,
+            best_epoch,
+            best_loss,
+            last_train_loss,
+        }) = summary
+        {
+            println!(
+                "stage {} {}: {epochs} epochs, kept epoch {} (selection loss {best_loss:.6}), \
+                 last train loss {last_train_loss:.6}",
+                i + 1,
+                stage_name(i + 1),
+                best_epoch + 1
+            );
+        }
+    }
+    println!("checkpoint: {}", report.checkpoint.display());
+}
