@@ -3,11 +3,15 @@
 # (or the checkpoint in $VADSCOPE_MODEL). The scenarios are copied to a temporary folder
 # first, so their score caches and estimated flows never land in the repository.
 #
-#   bash docs/gallery/regenerate.sh
+#   bash docs/gallery/regenerate.sh            (or VADSCOPE_BIN=path/to/vadscope bash ...)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-cargo build --quiet   # dev build: dependencies are optimised (Cargo.toml)
-bin=target/debug/vadscope
+# VADSCOPE_BIN names an already built binary; else a dev build (dependencies optimised).
+bin=${VADSCOPE_BIN:-}
+if [ -z "$bin" ]; then
+  cargo build --quiet
+  bin=target/debug/vadscope
+fi
 out=docs/gallery
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
