@@ -3,8 +3,11 @@
 //! appear and are reused, the tables have the rows asked for, and bad inputs fail with a
 //! message that names the culprit.
 
+mod cli_common;
+
+use cli_common::{text, vadscope};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use burn::tensor::Device;
 use serde_json::Value;
@@ -17,17 +20,6 @@ use vadscope::score::ScoreCache;
 /// Frames per generated scenario: the generator's shortest braking scenario (the lead
 /// vehicle brakes to a standstill inside it, so it has anomalous frames).
 const FRAMES: usize = 80;
-
-fn vadscope(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vadscope"))
-        .args(args)
-        .output()
-        .expect("the vadscope binary runs")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
 
 /// Runs vadscope and insists that it succeeds; returns standard output.
 fn succeed(args: &[&str]) -> String {

@@ -4,6 +4,9 @@
 //! input (no scenarios, an unwritable output folder, a corrupt checkpoint, a second run in a
 //! used folder) fails with a message that names the problem.
 
+mod cli_common;
+
+use cli_common::{text, vadscope};
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -11,17 +14,6 @@ use std::process::{Command, Output, Stdio};
 use burn::tensor::Device;
 use vadscope::model::{Detector, ModelConfig, load_checkpoint};
 use vadscope::train::CubeSet;
-
-fn vadscope(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vadscope"))
-        .args(args)
-        .output()
-        .expect("the vadscope binary runs")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
 
 fn path(p: &Path) -> &str {
     p.to_str().expect("utf-8 temp path")

@@ -1,6 +1,7 @@
 //! `vadscope export`: writes every frame annotated (frame view: heatmap, boxes, truth
 //! contour, caption) and `scores.csv` with a provenance header, scoring first when the
-//! scenario has no current score cache.
+//! scenario has no current score cache; with `--labels`, the analyst's labels in standard
+//! formats as well (or only them, with `--labels-only`, which needs no scoring).
 
 use std::ops::Range;
 use std::path::PathBuf;
@@ -8,12 +9,15 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use clap::Args;
+use vadscope::annotate::{LabelFormat, export_labels};
 use vadscope::render::{
     self, Colormap, FrameScene, FrameViewInput, Provenance, ScoreSeries, scores_csv,
 };
 use vadscope::score::PixelReferenceMode;
+use vadscope::sequence::Scenario;
 use vadscope::synth::parse_size;
 
+use super::labels::{open_editor, parse_format};
 use super::render::{frames_in, open_scored, parse_frames, save_png, settings_of};
 use super::score_cache::ScoreArgs;
 
@@ -41,12 +45,26 @@ pub struct ExportArgs {
     /// Write only `scores.csv`.
     #[arg(long)]
     no_frames: bool,
+    /// Also write the analyst's labels (the ground truth with every edit made in the viewer
+    /// or with `vadscope labels`) into `DIR/labels/`, in these formats: frame-labels,
+    /// boxes-csv, mot, coco, yolo, intervals-csv (comma-separated).
+    #[arg(long, value_name = "F,...", value_delimiter = ',', value_parser = parse_format)]
+    labels: Vec<LabelFormat>,
+    /// Write only the `--labels` files: no frames, no `scores.csv`, no scoring.
+    #[arg(long, requires = "labels")]
+    labels_only: bool,
     #[command(flatten)]
     scores: ScoreArgs,
 }
 
 /// Runs `vadscope export`.
 pub fn run(args: ExportArgs) -> anyhow::Result<ExitCode> {
+    if args.labels_only {
+        let scenario = Scenario::open(&args.scenario)?;
+        let written = write_labels(&scenario, &args.labels, &args.out)?;
+        println!("wrote {written} label files to {}", args.out.display());
+        return Ok(ExitCode::SUCCESS);
+    }
     let (scenario, cache, model) = open_scored(&args.scenario, &args.scores)?;
     let settings = settings_of(&args.scores, args.colormap, args.auto_range);
     let table = cache.table();
@@ -112,6 +130,30 @@ pub fn run(args: ExportArgs) -> anyhow::Result<ExitCode> {
             written += 1;
         }
     }
+    written += write_labels(&scenario, &args.labels, &args.out)?;
     println!("wrote {written} files to {}", args.out.display());
     Ok(ExitCode::SUCCESS)
+}
+
+/// Writes the scenario's labels in each of `formats` into `out/labels/` under the format's
+/// default file name; returns the number of files written.
+fn write_labels(
+    scenario: &Scenario,
+    formats: &[LabelFormat],
+    out: &std::path::Path,
+) -> anyhow::Result<usize> {
+    if formats.is_empty() {
+        return Ok(0);
+    }
+    let editor = open_editor(scenario)?;
+    let dir = out.join("labels");
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let mut files = 0;
+    for &format in formats {
+        let path = dir.join(format.default_file_name());
+        let summary = export_labels(scenario, editor.labels(), format, &path)?;
+        println!("{format}: {} rows to {}", summary.records, path.display());
+        files += summary.files;
+    }
+    Ok(files)
 }

@@ -36,7 +36,8 @@ pub struct LabelsArgs {
     stress_edits: Option<usize>,
 }
 
-fn parse_format(name: &str) -> Result<LabelFormat, String> {
+/// Parses a label format name (shared with `vadscope export --labels`).
+pub(super) fn parse_format(name: &str) -> Result<LabelFormat, String> {
     LabelFormat::from_name(name).ok_or_else(|| {
         let names: Vec<&str> = LabelFormat::ALL.iter().map(|f| f.name()).collect();
         format!("unknown format {name:?}; one of {}", names.join(", "))
@@ -46,14 +47,7 @@ fn parse_format(name: &str) -> Result<LabelFormat, String> {
 /// Runs `vadscope labels`.
 pub fn run(args: LabelsArgs) -> anyhow::Result<ExitCode> {
     let scenario = Scenario::open(&args.scenario)?;
-    let mut editor = Editor::open(&scenario)
-        .with_context(|| format!("opening the labels of {}", args.scenario.display()))?;
-    for problem in editor.load_problems() {
-        eprintln!("warning: {problem}");
-    }
-    for copy in editor.set_aside() {
-        eprintln!("warning: the damaged file was kept as {}", copy.display());
-    }
+    let mut editor = open_editor(&scenario)?;
     if let Some(n) = args.stress_edits {
         return stress(&mut editor, n);
     }
@@ -93,6 +87,20 @@ pub fn run(args: LabelsArgs) -> anyhow::Result<ExitCode> {
         show(&scenario, editor.labels(), &editor);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Opens the labels of `scenario`, warning about what recovery found (damaged files kept
+/// aside, journal records that did not apply).
+pub(super) fn open_editor(scenario: &Scenario) -> anyhow::Result<Editor> {
+    let editor = Editor::open(scenario)
+        .with_context(|| format!("opening the labels of {}", scenario.root().display()))?;
+    for problem in editor.load_problems() {
+        eprintln!("warning: {problem}");
+    }
+    for copy in editor.set_aside() {
+        eprintln!("warning: the damaged file was kept as {}", copy.display());
+    }
+    Ok(editor)
 }
 
 fn show(scenario: &Scenario, labels: &LabelSet, editor: &Editor) {

@@ -67,6 +67,19 @@ impl LabelFormat {
         }
     }
 
+    /// The file (a folder for YOLO) an export of this format is written to when only a
+    /// destination folder is given, as `vadscope export --labels` does.
+    pub fn default_file_name(self) -> &'static str {
+        match self {
+            LabelFormat::FrameLabels => "frame_labels.csv",
+            LabelFormat::BoxesCsv => "boxes.csv",
+            LabelFormat::Mot => "gt.txt",
+            LabelFormat::Coco => "coco.json",
+            LabelFormat::Yolo => "yolo",
+            LabelFormat::IntervalsCsv => "intervals.csv",
+        }
+    }
+
     /// The format named `name` (see [`LabelFormat::name`]).
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|f| f.name() == name)
