@@ -5,11 +5,10 @@
 
 mod cli_common;
 
-use cli_common::{text, vadscope};
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
 use burn::tensor::Device;
+use cli_common::{text, vadscope};
 use serde_json::Value;
 use vadscope::model::{
     CheckpointMeta, Hf2Vad, ModelConfig, NoiseRng, PixelStats, ScoreStats, TrainingStats,
