@@ -221,7 +221,7 @@ impl Scorer {
                     boxes.label(),
                     cache.path().display()
                 ));
-                return Ok(cache);
+                return Ok(*cache);
             }
             CacheLookup::Unusable { reason, .. } => {
                 self.say(&format!("{name}: scoring again: {reason}"));

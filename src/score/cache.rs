@@ -930,7 +930,7 @@ pub fn write_cache(
 #[derive(Debug)]
 pub enum CacheLookup {
     /// A cache computed for this key on the scenario as it is now.
-    Current(ScoreCache),
+    Current(Box<ScoreCache>),
     /// No cache exists; it would be written at this path.
     Missing(PathBuf),
     /// A file exists but cannot be used.
@@ -1074,7 +1074,7 @@ impl ScoreCache {
             Ok(cache)
         });
         match opened {
-            Ok(cache) => Ok(CacheLookup::Current(cache)),
+            Ok(cache) => Ok(CacheLookup::Current(Box::new(cache))),
             Err(e @ (ScoreError::Cache { .. } | ScoreError::Io { .. })) => {
                 Ok(CacheLookup::Unusable {
                     path,
