@@ -10,8 +10,8 @@ use crate::sequence::FlowField;
 use super::canvas::{Anchor, Canvas};
 use super::colormap::Colormap;
 use super::frame_view::BACKGROUND;
-use super::gallery::{GalleryItem, draw_gallery, gallery_order};
-use super::legend::{LEGEND_TEXT, colour_bar, short_number};
+use super::gallery::{GalleryItem, draw_error_gallery, gallery_order};
+use super::legend::{LEGEND_TEXT, short_number};
 use super::overlay::{Placement, SceneObject, ScoreScale, draw_boxes};
 use super::patches::{colorized_map, crop_range, flow_crop, max_or, patch_side, planar_flow};
 use super::pred_view::object_label;
@@ -239,34 +239,19 @@ pub(crate) fn draw_flow_view(
         .collect();
     let gallery_y = y + (title_h + top_h) as i32 + 4;
     let gallery_h = (h as i32 - (gallery_y - y)).max(0) as u32;
-    let bar_w = if w >= 200 && !items.is_empty() {
-        (w / 14).clamp(44, 80)
+    let bar_title = if auto {
+        "squared error, px² (auto range)"
     } else {
-        0
+        "squared error, px²"
     };
-    draw_gallery(
+    draw_error_gallery(
         canvas,
-        (x, gallery_y, w.saturating_sub(bar_w), gallery_h),
+        (x, gallery_y, w, gallery_h),
         &items,
         total,
         &["flow", "reconstruction", "error"],
-        "no scored object in this frame",
+        options.colormap,
+        error_range,
+        bar_title,
     );
-    if bar_w > 0 {
-        let title = if auto {
-            "squared error, px² (auto range)"
-        } else {
-            "squared error, px²"
-        };
-        colour_bar(
-            canvas,
-            x + (w - bar_w) as i32,
-            gallery_y,
-            bar_w,
-            gallery_h,
-            options.colormap,
-            (f64::from(error_range.0), f64::from(error_range.1)),
-            title,
-        );
-    }
 }

@@ -5,7 +5,8 @@
 use image::RgbImage;
 
 use super::canvas::{Anchor, Canvas};
-use super::legend::LEGEND_TEXT;
+use super::colormap::Colormap;
+use super::legend::{LEGEND_TEXT, colour_bar};
 use super::overlay::SceneObject;
 
 /// One object's tiles and its label.
@@ -21,6 +22,48 @@ const MAX_TILE: u32 = 192;
 
 /// Objects shown at most, the highest-scoring first.
 pub(crate) const GALLERY_OBJECTS: usize = 6;
+
+/// Draws a per-object gallery into the rectangle (x, y, w, h) with, when there is room and
+/// something to show, a colour bar of the error tiles' `range` at its right edge titled
+/// `bar_title`. Shared by the prediction and flow views, whose galleries differ only in
+/// their tiles and titles.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn draw_error_gallery(
+    canvas: &mut Canvas,
+    (x, y, w, h): (i32, i32, u32, u32),
+    items: &[GalleryItem],
+    total: usize,
+    titles: &[&str],
+    colormap: Colormap,
+    range: (f32, f32),
+    bar_title: &str,
+) {
+    let bar_w = if w >= 200 && !items.is_empty() {
+        (w / 14).clamp(44, 80)
+    } else {
+        0
+    };
+    draw_gallery(
+        canvas,
+        (x, y, w.saturating_sub(bar_w), h),
+        items,
+        total,
+        titles,
+        "no scored object in this frame",
+    );
+    if bar_w > 0 {
+        colour_bar(
+            canvas,
+            x + (w - bar_w) as i32,
+            y,
+            bar_w,
+            h,
+            colormap,
+            (f64::from(range.0), f64::from(range.1)),
+            bar_title,
+        );
+    }
+}
 
 /// Draws `items` (chosen by [`gallery_order`] from `total` objects) into the rectangle
 /// (x, y, w, h), tile columns titled `titles`; says so when there is no object.

@@ -7,8 +7,8 @@ use image::{RgbImage, RgbaImage};
 use super::canvas::{Anchor, Canvas};
 use super::colormap::Colormap;
 use super::frame_view::BACKGROUND;
-use super::gallery::{GalleryItem, draw_gallery, gallery_order};
-use super::legend::{LEGEND_TEXT, colour_bar};
+use super::gallery::{GalleryItem, draw_error_gallery, gallery_order};
+use super::legend::LEGEND_TEXT;
 use super::overlay::{Placement, SceneObject, ScoreScale, draw_boxes};
 use super::patches::{colorized_map, crop_range, frame_crop, max_or, patch_side, planar_rgb};
 
@@ -159,36 +159,21 @@ pub(crate) fn draw_pred_view(
         .collect();
     let gallery_y = y + (title_h + top_h) as i32 + 4;
     let gallery_h = (h as i32 - (gallery_y - y)).max(0) as u32;
-    let bar_w = if w >= 200 && !items.is_empty() {
-        (w / 14).clamp(44, 80)
+    let bar_title = if auto {
+        "squared error (auto range)"
     } else {
-        0
+        "squared error"
     };
-    draw_gallery(
+    draw_error_gallery(
         canvas,
-        (x, gallery_y, w.saturating_sub(bar_w), gallery_h),
+        (x, gallery_y, w, gallery_h),
         &items,
         total,
         &["actual", "predicted", "error"],
-        "no scored object in this frame",
+        options.colormap,
+        range,
+        bar_title,
     );
-    if bar_w > 0 {
-        let title = if auto {
-            "squared error (auto range)"
-        } else {
-            "squared error"
-        };
-        colour_bar(
-            canvas,
-            x + (w - bar_w) as i32,
-            gallery_y,
-            bar_w,
-            gallery_h,
-            options.colormap,
-            (f64::from(range.0), f64::from(range.1)),
-            title,
-        );
-    }
 }
 
 /// "#track score" of a gallery entry.
