@@ -3,45 +3,25 @@
 //! scenario has no current score cache; with `--labels`, the analyst's labels in standard
 //! formats as well (or only them, with `--labels-only`, which needs no scoring).
 
-use std::ops::Range;
-use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context;
 use clap::Args;
 use vadscope::annotate::{LabelFormat, export_labels};
-use vadscope::render::{
-    self, Colormap, FrameScene, FrameViewInput, Provenance, ScoreSeries, scores_csv,
-};
+use vadscope::render::{self, FrameScene, FrameViewInput, Provenance, ScoreSeries, scores_csv};
 use vadscope::score::PixelReferenceMode;
 use vadscope::sequence::Scenario;
-use vadscope::synth::parse_size;
 
 use super::labels::{open_editor, parse_format};
-use super::render::{frames_in, open_scored, parse_frames, save_png, settings_of};
-use super::score_cache::ScoreArgs;
+use super::scenario_views::{ScenarioViewArgs, save_png};
 
 /// Options of `vadscope export`.
 #[derive(Debug, Args)]
 pub struct ExportArgs {
-    /// The scenario folder.
-    scenario: PathBuf,
-    /// Folder to write `frames/` and `scores.csv` into (created if missing).
-    #[arg(long)]
-    out: PathBuf,
-    /// Frames to write as images, START..END (END excluded) or one index (default: all);
-    /// `scores.csv` always has every frame.
-    #[arg(long, value_name = "START..END", value_parser = parse_frames)]
-    frames: Option<Range<usize>>,
-    /// Colormap of heatmaps and boxes: turbo, viridis, inferno or jet.
-    #[arg(long, default_value = "turbo")]
-    colormap: Colormap,
-    /// Scale the heatmap per frame (labelled) instead of the model's reference range.
-    #[arg(long)]
-    auto_range: bool,
-    /// Image size as WIDTHxHEIGHT (default: the frame 1:1 with caption and colour bar).
-    #[arg(long, value_name = "WxH", value_parser = parse_size)]
-    size: Option<(u32, u32)>,
+    // The scenario, the frames written as images (`scores.csv` always has every frame), how
+    // they are drawn, the scores, and the folder that receives `frames/` and `scores.csv`.
+    #[command(flatten)]
+    target: ScenarioViewArgs,
     /// Write only `scores.csv`.
     #[arg(long)]
     no_frames: bool,
@@ -53,20 +33,19 @@ pub struct ExportArgs {
     /// Write only the `--labels` files: no frames, no `scores.csv`, no scoring.
     #[arg(long, requires = "labels")]
     labels_only: bool,
-    #[command(flatten)]
-    scores: ScoreArgs,
 }
 
 /// Runs `vadscope export`.
 pub fn run(args: ExportArgs) -> anyhow::Result<ExitCode> {
+    let target = &args.target;
     if args.labels_only {
-        let scenario = Scenario::open(&args.scenario)?;
-        let written = write_labels(&scenario, &args.labels, &args.out)?;
-        println!("wrote {written} label files to {}", args.out.display());
+        let scenario = Scenario::open(&target.scenario)?;
+        let written = write_labels(&scenario, &args.labels, target)?;
+        println!("wrote {written} label files to {}", target.out.display());
         return Ok(ExitCode::SUCCESS);
     }
-    let (scenario, cache, model) = open_scored(&args.scenario, &args.scores)?;
-    let settings = settings_of(&args.scores, args.colormap, args.auto_range);
+    let (scenario, cache, model) = target.open_scored()?;
+    let settings = target.settings();
     let table = cache.table();
     let series = ScoreSeries::compute(
         table,
@@ -74,8 +53,7 @@ pub fn run(args: ExportArgs) -> anyhow::Result<ExitCode> {
         &settings.weights,
         settings.median_kernel,
     );
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let out = target.create_out("")?;
     let provenance = Provenance {
         version: env!("CARGO_PKG_VERSION").to_string(),
         scenario: scenario.name().to_string(),
@@ -90,16 +68,14 @@ pub fn run(args: ExportArgs) -> anyhow::Result<ExitCode> {
     let frames = if args.no_frames {
         None
     } else {
-        Some(frames_in(&scenario, args.frames.as_ref())?)
+        Some(target.frames_in(&scenario)?)
     };
-    let csv_path = args.out.join("scores.csv");
+    let csv_path = out.join("scores.csv");
     std::fs::write(&csv_path, scores_csv(table, &series, &provenance))
         .with_context(|| format!("cannot write {}", csv_path.display()))?;
     let mut written = 1;
     if let Some(frames) = frames {
-        let dir = args.out.join("frames");
-        std::fs::create_dir_all(&dir)
-            .with_context(|| format!("cannot create {}", dir.display()))?;
+        let dir = target.create_out("frames")?;
         let options = settings.options(table).frame;
         let name = scenario.name().to_string();
         for index in frames {
@@ -120,7 +96,7 @@ pub fn run(args: ExportArgs) -> anyhow::Result<ExitCode> {
                 anomaly_mask: scene.mask.as_deref(),
                 caption: Some(&caption),
             };
-            let size = args
+            let size = target
                 .size
                 .unwrap_or_else(|| render::natural_size(scene.frame.dimensions(), &options));
             save_png(
@@ -130,24 +106,23 @@ pub fn run(args: ExportArgs) -> anyhow::Result<ExitCode> {
             written += 1;
         }
     }
-    written += write_labels(&scenario, &args.labels, &args.out)?;
-    println!("wrote {written} files to {}", args.out.display());
+    written += write_labels(&scenario, &args.labels, target)?;
+    println!("wrote {written} files to {}", out.display());
     Ok(ExitCode::SUCCESS)
 }
 
-/// Writes the scenario's labels in each of `formats` into `out/labels/` under the format's
-/// default file name; returns the number of files written.
+/// Writes the scenario's labels in each of `formats` into `labels/` below `--out` under the
+/// format's default file name; returns the number of files written.
 fn write_labels(
     scenario: &Scenario,
     formats: &[LabelFormat],
-    out: &std::path::Path,
+    target: &ScenarioViewArgs,
 ) -> anyhow::Result<usize> {
     if formats.is_empty() {
         return Ok(0);
     }
     let editor = open_editor(scenario)?;
-    let dir = out.join("labels");
-    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let dir = target.create_out("labels")?;
     let mut files = 0;
     for &format in formats {
         let path = dir.join(format.default_file_name());

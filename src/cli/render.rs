@@ -3,52 +3,33 @@
 
 use std::fs::File;
 use std::io::BufWriter;
-use std::ops::Range;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::ExitCode;
 
-use anyhow::{Context, bail};
+use anyhow::Context;
 use clap::{Args, ValueEnum};
 use image::codecs::gif::{GifEncoder, Repeat};
 use image::{Delay, Frame, RgbaImage};
 use vadscope::render::{
-    self, Colormap, DashboardInput, FlowViewInput, FrameScene, FrameViewInput, PredViewInput,
-    ScoreLabels, ScoreSeries, TimelineOptions, ViewSettings,
+    self, DashboardInput, FlowViewInput, FrameScene, FrameViewInput, PredViewInput, ScoreLabels,
+    ScoreSeries, TimelineOptions,
 };
-use vadscope::score::{FlowProvider, FlowSource, PixelReferenceMode, ScoreCache};
-use vadscope::sequence::Scenario;
-use vadscope::synth::parse_size;
+use vadscope::score::{FlowProvider, FlowSource, PixelReferenceMode};
 
-use super::score_cache::{ScoreArgs, current_cache};
+use super::scenario_views::{ScenarioViewArgs, save_png};
 
 /// Options of `vadscope render`.
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// The scenario folder.
-    scenario: PathBuf,
-    /// Frames to render, as START..END (END excluded) or one index (default: all).
-    #[arg(long, value_name = "START..END", value_parser = parse_frames)]
-    frames: Option<Range<usize>>,
+    // The scenario, the frames, how they are drawn, the scores and the output folder.
+    #[command(flatten)]
+    target: ScenarioViewArgs,
     /// Views to write (comma-separated).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "dashboard")]
     view: Vec<ViewArg>,
-    /// Colormap of heatmaps, error maps and boxes: turbo, viridis, inferno or jet.
-    #[arg(long, default_value = "turbo")]
-    colormap: Colormap,
-    /// Scale the heatmap per frame (labelled) instead of the model's reference range.
-    #[arg(long)]
-    auto_range: bool,
-    /// Image size as WIDTHxHEIGHT (default: per view).
-    #[arg(long, value_name = "WxH", value_parser = parse_size)]
-    size: Option<(u32, u32)>,
-    /// Folder to write the images into (created if missing).
-    #[arg(long)]
-    out: PathBuf,
     /// Also write one animated GIF per frame view (10 frames/s).
     #[arg(long)]
     gif: bool,
-    #[command(flatten)]
-    scores: ScoreArgs,
 }
 
 /// The views `vadscope render` can write.
@@ -88,84 +69,13 @@ impl ViewArg {
     }
 }
 
-/// Parses `A..B` (B excluded) or a single frame index `A`.
-pub fn parse_frames(text: &str) -> Result<Range<usize>, String> {
-    let bad =
-        |e: std::num::ParseIntError| format!("{text:?}: {e} (expected START..END or one index)");
-    match text.split_once("..") {
-        Some((a, b)) => {
-            let (a, b) = (
-                a.trim().parse::<usize>().map_err(bad)?,
-                b.trim().parse::<usize>().map_err(bad)?,
-            );
-            if b <= a {
-                return Err(format!("{text:?}: END must be greater than START"));
-            }
-            Ok(a..b)
-        }
-        None => {
-            let a = text.trim().parse::<usize>().map_err(bad)?;
-            Ok(a..a + 1)
-        }
-    }
-}
-
-/// The frames of `range` clipped to the scenario, with an error when nothing is left.
-pub fn frames_in(
-    scenario: &Scenario,
-    range: Option<&Range<usize>>,
-) -> anyhow::Result<Range<usize>> {
-    let n = scenario.len();
-    let frames = match range {
-        Some(r) => r.start.min(n)..r.end.min(n),
-        None => 0..n,
-    };
-    if frames.is_empty() {
-        bail!(
-            "{}: no frame in {:?} (the scenario has {n} frames)",
-            scenario.root().display(),
-            range.cloned().unwrap_or(0..0)
-        );
-    }
-    Ok(frames)
-}
-
-/// Writes `image` as PNG at `path`.
-pub fn save_png(image: &RgbaImage, path: &Path) -> anyhow::Result<()> {
-    image
-        .save(path)
-        .with_context(|| format!("cannot write {}", path.display()))
-}
-
-/// The view settings of `args`.
-pub fn settings_of(scores: &ScoreArgs, colormap: Colormap, auto_range: bool) -> ViewSettings {
-    ViewSettings {
-        weights: scores.fusion_weights(),
-        threshold: scores.decision_threshold(),
-        colormap,
-        auto_range,
-        median_kernel: scores.median_kernel,
-    }
-}
-
-/// Opens the scenario and its current score cache (scoring first when needed).
-pub fn open_scored(
-    path: &Path,
-    scores: &ScoreArgs,
-) -> anyhow::Result<(Scenario, ScoreCache, PathBuf)> {
-    let scenario =
-        Scenario::open(path).with_context(|| format!("cannot open scenario {}", path.display()))?;
-    let (cache, model) = current_cache(&scenario, scores)?;
-    Ok((scenario, cache, model))
-}
-
 /// Runs `vadscope render`.
 pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
-    let (scenario, cache, _) = open_scored(&args.scenario, &args.scores)?;
-    let frames = frames_in(&scenario, args.frames.as_ref())?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let settings = settings_of(&args.scores, args.colormap, args.auto_range);
+    let target = &args.target;
+    let (scenario, cache, _) = target.open_scored()?;
+    let frames = target.frames_in(&scenario)?;
+    let out = target.create_out("")?;
+    let settings = target.settings();
     let table = cache.table();
     let series = ScoreSeries::compute(
         table,
@@ -174,7 +84,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         settings.median_kernel,
     );
     let options = settings.options(table);
-    let windowed = args.frames.is_some();
+    let windowed = target.frames.is_some();
     let evaluation = ScoreLabels {
         scores: &series.filtered[series.skip..],
         labels: &series.truth[series.skip..],
@@ -190,20 +100,20 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
                     ..TimelineOptions::default()
                 };
                 let input = series.timeline(&[], Some(settings.threshold), None);
-                let image =
-                    render::timeline(&input, &timeline_options, args.size.unwrap_or((1200, 360)));
-                save_png(&image, &args.out.join("timeline.png"))?;
+                let image = render::timeline(
+                    &input,
+                    &timeline_options,
+                    target.size.unwrap_or((1200, 360)),
+                );
+                save_png(&image, &out.join("timeline.png"))?;
                 written += 1;
             }
             _ => {
-                let size = args.size.unwrap_or((520, 420));
-                save_png(
-                    &render::roc_chart(&evaluation, size),
-                    &args.out.join("roc.png"),
-                )?;
+                let size = target.size.unwrap_or((520, 420));
+                save_png(&render::roc_chart(&evaluation, size), &out.join("roc.png"))?;
                 save_png(
                     &render::histogram(&evaluation, size),
-                    &args.out.join("histogram.png"),
+                    &out.join("histogram.png"),
                 )?;
                 written += 2;
             }
@@ -245,7 +155,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
             for (k, view) in per_frame.iter().enumerate() {
                 let image = match view {
                     ViewArg::Frame => {
-                        let size = args
+                        let size = target
                             .size
                             .unwrap_or_else(|| render::natural_size(dims, &options.frame));
                         render::frame_view(&frame_input, &options.frame, size)
@@ -258,7 +168,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
                         render::pred_view(
                             &input,
                             &options.pred,
-                            args.size.unwrap_or((2 * dims.0, 2 * dims.1)),
+                            target.size.unwrap_or((2 * dims.0, 2 * dims.1)),
                         )
                     }
                     ViewArg::Flow => {
@@ -270,7 +180,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
                         render::flow_view(
                             &input,
                             &options.flow,
-                            args.size.unwrap_or((3 * dims.0, 2 * dims.1)),
+                            target.size.unwrap_or((3 * dims.0, 2 * dims.1)),
                         )
                     }
                     _ => {
@@ -280,13 +190,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
                             timeline: series.timeline(&[], Some(settings.threshold), Some(index)),
                             evaluation: Some(evaluation),
                         };
-                        render::dashboard(&input, &options, args.size.unwrap_or((1600, 1000)))
+                        render::dashboard(&input, &options, target.size.unwrap_or((1600, 1000)))
                     }
                 };
-                save_png(
-                    &image,
-                    &args.out.join(format!("{}_{index:05}.png", view.name())),
-                )?;
+                save_png(&image, &out.join(format!("{}_{index:05}.png", view.name())))?;
                 written += 1;
                 if args.gif {
                     animations[k].push(image);
@@ -295,13 +202,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         }
         if args.gif {
             for (view, images) in per_frame.iter().zip(animations) {
-                let path = args.out.join(format!("{}.gif", view.name()));
+                let path = out.join(format!("{}.gif", view.name()));
                 write_gif(&images, &path)?;
                 written += 1;
             }
         }
     }
-    println!("wrote {written} files to {}", args.out.display());
+    println!("wrote {written} files to {}", out.display());
     Ok(ExitCode::SUCCESS)
 }
 
