@@ -10,10 +10,10 @@ mod render_common;
 use std::path::PathBuf;
 
 use image::RgbaImage;
-use render_common::{boxes, flow, frame, heatmap, maps, mask, objects, series};
+use render_common::{flow, frame, heatmap, maps, mask, objects, series};
 use vadscope::render::{
     self, Caption, FlowViewInput, FlowViewOptions, FrameViewInput, FrameViewOptions, PredViewInput,
-    PredViewOptions, SceneObject, ScoreLabels, TimelineInput, TimelineOptions,
+    PredViewOptions, ScoreLabels, TimelineInput, TimelineOptions,
 };
 use vadscope::score::FusionWeights;
 

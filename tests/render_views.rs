@@ -9,10 +9,10 @@ use image::RgbaImage;
 use render_common::{boxes, flow, frame, heatmap, maps, mask, objects, series};
 use vadscope::render::{
     self, Caption, Colormap, DashboardInput, DashboardOptions, FlowViewInput, FlowViewOptions,
-    FrameViewInput, FrameViewOptions, PredViewInput, PredViewOptions, SceneObject, ScoreLabels,
-    TimelineInput, TimelineLayout, TimelineOptions,
+    FrameViewInput, FrameViewOptions, PredViewInput, PredViewOptions, ScoreLabels, TimelineInput,
+    TimelineLayout, TimelineOptions,
 };
-use vadscope::score::{FusionWeights, ObjectMaps};
+use vadscope::score::FusionWeights;
 
 const SIZES: [(u32, u32); 5] = [(1, 1), (8, 8), (192, 128), (1600, 1000), (2600, 1700)];
 
