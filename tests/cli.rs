@@ -5,29 +5,13 @@ mod cli_common;
 
 use std::path::Path;
 
-use cli_common::{scenario_folders, text, vadscope};
+use cli_common::{scenario_folders, text, tiny_generate_args, vadscope};
 
 #[test]
 fn generate_then_inspect_round_trip() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().to_str().unwrap();
-    let gen_args = [
-        "generate",
-        "--out",
-        out,
-        "--kind",
-        "normal",
-        "--domain",
-        "city",
-        "--weather",
-        "sun",
-        "--frames",
-        "12",
-        "--size",
-        "96x64",
-        "--seed",
-        "3",
-    ];
+    let gen_args = tiny_generate_args(out, "3");
     let generated = vadscope(&gen_args);
     assert!(
         generated.status.success(),

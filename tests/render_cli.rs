@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::Output;
 
 use burn::tensor::Device;
-use cli_common::{scenario_folders, text, vadscope};
+use cli_common::{scenario_folders, text, tiny_generate_args, vadscope};
 use vadscope::eval::MeanStd;
 use vadscope::model::{
     CheckpointMeta, Hf2Vad, ModelConfig, NoiseRng, PixelStats, TrainingStats, save_checkpoint,
@@ -97,23 +97,7 @@ fn tiny_checkpoint(dir: &Path) -> PathBuf {
 
 /// Generates one 12-frame 96×64 scenario under `dir` and returns its folder.
 fn tiny_scenario(dir: &Path) -> PathBuf {
-    let out = vadscope(&[
-        "generate",
-        "--out",
-        dir.to_str().unwrap(),
-        "--kind",
-        "normal",
-        "--domain",
-        "city",
-        "--weather",
-        "sun",
-        "--frames",
-        "12",
-        "--size",
-        "96x64",
-        "--seed",
-        "4",
-    ]);
+    let out = vadscope(&tiny_generate_args(dir.to_str().unwrap(), "4"));
     assert!(
         out.status.success(),
         "generate failed: {}",

@@ -10,10 +10,10 @@ mod render_common;
 use std::path::PathBuf;
 
 use image::RgbaImage;
-use render_common::{boxes, flow, frame, heatmap, maps, mask, series};
+use render_common::{flow, frame, heatmap, maps, mask, objects, series};
 use vadscope::render::{
     self, Caption, FlowViewInput, FlowViewOptions, FrameViewInput, FrameViewOptions, PredViewInput,
-    PredViewOptions, SceneObject, ScoreLabels, TimelineInput, TimelineOptions,
+    PredViewOptions, ScoreLabels, TimelineInput, TimelineOptions,
 };
 use vadscope::score::FusionWeights;
 
@@ -71,23 +71,10 @@ fn scene() -> (image::RgbImage, [vadscope::score::ObjectMaps; 2]) {
     (frame(96, 64), [maps(1.0), maps(5.0)])
 }
 
-fn objects(maps: &[vadscope::score::ObjectMaps]) -> Vec<SceneObject<'_>> {
-    boxes(96, 64)
-        .iter()
-        .enumerate()
-        .map(|(k, b)| SceneObject {
-            bbox: *b,
-            track_id: k as u64 + 1,
-            score: Some(10.0 + 40.0 * k as f64),
-            maps: maps.get(k),
-        })
-        .collect()
-}
-
 #[test]
 fn frame_view_matches_its_golden_image() {
     let (image, maps) = scene();
-    let objects = objects(&maps);
+    let objects = objects(96, 64, &maps);
     let heat = heatmap(96, 64);
     let truth = mask(96, 64);
     let caption = Caption {
@@ -115,7 +102,7 @@ fn frame_view_matches_its_golden_image() {
 #[test]
 fn pred_and_flow_views_match_their_golden_images() {
     let (image, maps) = scene();
-    let objects = objects(&maps);
+    let objects = objects(96, 64, &maps);
     let pred = PredViewInput {
         frame: &image,
         objects: &objects,

@@ -6,28 +6,15 @@
 mod render_common;
 
 use image::RgbaImage;
-use render_common::{boxes, flow, frame, heatmap, maps, mask, series};
+use render_common::{boxes, flow, frame, heatmap, maps, mask, objects, series};
 use vadscope::render::{
     self, Caption, Colormap, DashboardInput, DashboardOptions, FlowViewInput, FlowViewOptions,
-    FrameViewInput, FrameViewOptions, PredViewInput, PredViewOptions, SceneObject, ScoreLabels,
-    TimelineInput, TimelineLayout, TimelineOptions,
+    FrameViewInput, FrameViewOptions, PredViewInput, PredViewOptions, ScoreLabels, TimelineInput,
+    TimelineLayout, TimelineOptions,
 };
-use vadscope::score::{FusionWeights, ObjectMaps};
+use vadscope::score::FusionWeights;
 
 const SIZES: [(u32, u32); 5] = [(1, 1), (8, 8), (192, 128), (1600, 1000), (2600, 1700)];
-
-fn objects<'a>(w: u32, h: u32, maps: &'a [ObjectMaps]) -> Vec<SceneObject<'a>> {
-    boxes(w, h)
-        .iter()
-        .enumerate()
-        .map(|(k, b)| SceneObject {
-            bbox: *b,
-            track_id: k as u64 + 1,
-            score: Some(10.0 + 40.0 * k as f64),
-            maps: maps.get(k),
-        })
-        .collect()
-}
 
 fn caption() -> Caption {
     Caption {

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 use clap::Args;
 use vadscope::annotate::{LabelFormat, export_labels};
-use vadscope::render::{self, FrameScene, FrameViewInput, Provenance, ScoreSeries, scores_csv};
+use vadscope::render::{self, FrameScene, Provenance, ScoreSeries, scores_csv};
 use vadscope::score::PixelReferenceMode;
 use vadscope::sequence::Scenario;
 
@@ -89,13 +89,7 @@ pub fn run(args: ExportArgs) -> anyhow::Result<ExitCode> {
             )?;
             let objects = scene.scene_objects();
             let caption = scene.caption(&name, &series, &settings);
-            let input = FrameViewInput {
-                frame: &scene.frame,
-                objects: &objects,
-                heatmap: scene.heatmap.as_ref(),
-                anomaly_mask: scene.mask.as_deref(),
-                caption: Some(&caption),
-            };
+            let input = scene.frame_input(&objects, Some(&caption));
             let size = target
                 .size
                 .unwrap_or_else(|| render::natural_size(scene.frame.dimensions(), &options));

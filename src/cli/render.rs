@@ -11,8 +11,8 @@ use clap::{Args, ValueEnum};
 use image::codecs::gif::{GifEncoder, Repeat};
 use image::{Delay, Frame, RgbaImage};
 use vadscope::render::{
-    self, DashboardInput, FlowViewInput, FrameScene, FrameViewInput, PredViewInput, ScoreLabels,
-    ScoreSeries, TimelineOptions,
+    self, DashboardInput, FlowViewInput, FrameScene, PredViewInput, ScoreLabels, ScoreSeries,
+    TimelineOptions,
 };
 use vadscope::score::{FlowProvider, FlowSource, PixelReferenceMode};
 
@@ -144,13 +144,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
             )?;
             let objects = scene.scene_objects();
             let caption = scene.caption(&name, &series, &settings);
-            let frame_input = FrameViewInput {
-                frame: &scene.frame,
-                objects: &objects,
-                heatmap: scene.heatmap.as_ref(),
-                anomaly_mask: scene.mask.as_deref(),
-                caption: Some(&caption),
-            };
+            let frame_input = scene.frame_input(&objects, Some(&caption));
             let dims = scene.frame.dimensions();
             for (k, view) in per_frame.iter().enumerate() {
                 let image = match view {

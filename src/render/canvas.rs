@@ -36,8 +36,6 @@ pub(crate) enum Anchor {
     TopLeft,
     /// Anchor at the middle of the top edge.
     TopCenter,
-    /// Anchor at the top-right corner.
-    TopRight,
     /// Anchor at the middle of the left edge.
     MiddleLeft,
     /// Anchor at the middle of the right edge.
@@ -51,7 +49,6 @@ impl Anchor {
         match self {
             Self::TopLeft => Pos::new(HPos::Left, VPos::Top),
             Self::TopCenter => Pos::new(HPos::Center, VPos::Top),
-            Self::TopRight => Pos::new(HPos::Right, VPos::Top),
             Self::MiddleLeft => Pos::new(HPos::Left, VPos::Center),
             Self::MiddleRight => Pos::new(HPos::Right, VPos::Center),
             Self::Center => Pos::new(HPos::Center, VPos::Center),
@@ -145,10 +142,11 @@ impl Canvas {
         mut color_of: impl FnMut(usize) -> Option<[u8; 3]>,
     ) {
         let first = (-x).clamp(0, len as i32) as usize;
+        let a = fixed_alpha(alpha);
         let span = self.row_span(y, x + first as i32, x + len as i32);
         for (k, px) in span.chunks_exact_mut(3).enumerate() {
             if let Some(color) = color_of(first + k) {
-                blend_into(px, color, alpha);
+                blend_fixed(px, color, a);
             }
         }
     }
@@ -177,15 +175,16 @@ impl Canvas {
         color: [u8; 3],
         alpha: f32,
     ) {
+        let a = fixed_alpha(alpha);
         for y in y0.max(0)..y1.min(self.height as i32) {
             let span = self.row_span(y, x0, x1);
-            if alpha >= 1.0 {
+            if a >= 256 {
                 for px in span.chunks_exact_mut(3) {
                     px.copy_from_slice(&color);
                 }
             } else {
                 for px in span.chunks_exact_mut(3) {
-                    blend_into(px, color, alpha);
+                    blend_fixed(px, color, a);
                 }
             }
         }
@@ -206,6 +205,19 @@ impl Canvas {
         self.fill_rect(x0, (y1 - t).max(y0), x1, y1, color, 1.0);
         self.fill_rect(x0, y0, (x0 + t).min(x1), y1, color, 1.0);
         self.fill_rect((x1 - t).max(x0), y0, x1, y1, color, 1.0);
+    }
+
+    /// A vertical line in column `x` from row `y0` to row `y1`, both included; clipped.
+    pub(crate) fn vline(&mut self, x: i32, y0: i32, y1: i32, color: [u8; 3]) {
+        if x < 0 || x as u32 >= self.width {
+            return;
+        }
+        let (top, bottom) = (y0.min(y1).max(0), y0.max(y1).min(self.height as i32 - 1));
+        let stride = 3 * self.width as usize;
+        for y in top..=bottom {
+            let o = y as usize * stride + 3 * x as usize;
+            self.pixels[o..o + 3].copy_from_slice(&color);
+        }
     }
 
     /// A straight line from (x0, y0) to (x1, y1), both ends included (Bresenham).
@@ -282,7 +294,8 @@ impl Canvas {
             }
             let span = self.row_span(ty, x + c0 as i32, x + c1 as i32);
             for ((px, t), b) in span.iter_mut().zip(&top).zip(&bottom) {
-                *px = (t * (1.0 - fy) + b * fy).round() as u8;
+                // Non-negative, so adding one half and truncating rounds.
+                *px = (t * (1.0 - fy) + b * fy + 0.5) as u8;
             }
         }
     }
@@ -308,15 +321,44 @@ impl Canvas {
     /// Draws `image` scaled with nearest-neighbour sampling (crisp patch pixels) into
     /// columns `x..x+w`, rows `y..y+h`.
     pub(crate) fn blit_scaled_nearest(&mut self, image: &RgbImage, x: i32, y: i32, w: u32, h: u32) {
-        if image.width() == 0 || image.height() == 0 {
+        if image.width() == 0 || image.height() == 0 || w == 0 {
             return;
         }
+        let first = (-x).clamp(0, w as i32) as u32;
+        let columns: Vec<usize> = (first..w)
+            .map(|col| 3 * (u64::from(col) * u64::from(image.width()) / u64::from(w)) as usize)
+            .collect();
+        let stride = 3 * image.width() as usize;
         for row in 0..h {
-            let sy = (u64::from(row) * u64::from(image.height()) / u64::from(h)) as u32;
-            for col in 0..w {
-                let sx = (u64::from(col) * u64::from(image.width()) / u64::from(w)) as u32;
-                self.put(x + col as i32, y + row as i32, image.get_pixel(sx, sy).0);
+            let sy = (u64::from(row) * u64::from(image.height()) / u64::from(h)) as usize;
+            let line = &image.as_raw()[sy * stride..(sy + 1) * stride];
+            let span = self.row_span(y + row as i32, x + first as i32, x + w as i32);
+            for (px, &sx) in span.chunks_exact_mut(3).zip(&columns) {
+                px.copy_from_slice(&line[sx..sx + 3]);
             }
+        }
+    }
+
+    /// Copies the rectangle (x, y, w, h) of this canvas to top-left corner (to_x, to_y);
+    /// both clipped to the canvas.
+    pub(crate) fn copy_within(&mut self, (x, y, w, h): (i32, i32, u32, u32), to_x: i32, to_y: i32) {
+        let x0 = x.max(0).max(x - to_x);
+        let x1 = (x + w as i32)
+            .min(self.width as i32)
+            .min(self.width as i32 + x - to_x);
+        if x1 <= x0 {
+            return;
+        }
+        let stride = 3 * self.width as usize;
+        for row in 0..h as i32 {
+            let (sy, dy) = (y + row, to_y + row);
+            if sy < 0 || dy < 0 || sy as u32 >= self.height || dy as u32 >= self.height {
+                continue;
+            }
+            let from = sy as usize * stride + 3 * x0 as usize;
+            let to = dy as usize * stride + 3 * (x0 + to_x - x) as usize;
+            self.pixels
+                .copy_within(from..from + 3 * (x1 - x0) as usize, to);
         }
     }
 
@@ -341,6 +383,16 @@ impl Canvas {
     /// Width and height of `text` at `size` pixels.
     pub(crate) fn text_size(text: &str, size: f64) -> (u32, u32) {
         rasterized(text, size).map_or((0, 0), |r| (r.width, r.height))
+    }
+
+    /// The largest size at most `size` (and at least 7 pixels) at which `text` is at most
+    /// `width` pixels wide; 7 when even that is wider.
+    pub(crate) fn fitting_size(text: &str, size: f64, width: u32) -> f64 {
+        let mut size = size;
+        while size > 7.0 && Self::text_size(text, size).0 > width {
+            size = (size - 1.0).max(7.0);
+        }
+        size
     }
 
     /// Draws `text` at `size` pixels with its `anchor` at (x, y); clipped to the canvas.
@@ -462,10 +514,19 @@ fn rasterized(text: &str, size: f64) -> Option<Rc<RasterText>> {
 
 /// Blends `color` over the RGB pixel `px` with opacity `alpha`.
 fn blend_into(px: &mut [u8], color: [u8; 3], alpha: f32) {
-    let a = alpha.clamp(0.0, 1.0);
+    blend_fixed(px, color, fixed_alpha(alpha));
+}
+
+/// Opacity in [0, 1] as a weight in 0..=256 for [`blend_fixed`].
+fn fixed_alpha(alpha: f32) -> u32 {
+    (alpha.clamp(0.0, 1.0) * 256.0 + 0.5) as u32
+}
+
+/// Blends `color` over the RGB pixel `px` with weight `a` in 0..=256 (integer arithmetic,
+/// rounded).
+fn blend_fixed(px: &mut [u8], color: [u8; 3], a: u32) {
     for c in 0..3 {
-        let v = f32::from(px[c]) * (1.0 - a) + f32::from(color[c]) * a;
-        px[c] = v.round() as u8;
+        px[c] = ((u32::from(px[c]) * (256 - a) + u32::from(color[c]) * a + 128) >> 8) as u8;
     }
 }
 

@@ -24,6 +24,8 @@ pub(crate) enum Backdrop<'a> {
     Flow(&'a FlowField, f32),
     /// One colour.
     Fill([u8; 3]),
+    /// The backdrop of the earlier panel with this index, copied rather than drawn again.
+    SameAs(usize),
 }
 
 /// One panel of the row.
@@ -34,6 +36,9 @@ pub(crate) struct Panel<'a> {
     pub backdrop: Backdrop<'a>,
     /// Per object (in the order of the objects), a patch scaled into its box, or `None`.
     pub patches: Vec<Option<RgbImage>>,
+    /// A key drawn in the panel's top-right corner, a quarter of its height (e.g. the flow's
+    /// colour wheel).
+    pub key: Option<RgbImage>,
 }
 
 /// How the panels draw the boxes.
@@ -60,13 +65,14 @@ pub(crate) fn draw_comparison(
     let title_h = Canvas::text_size("Ag", font).1 + 6;
     let top_h = (h * 11 / 20).saturating_sub(title_h);
     let each = w / panels.len().max(1) as u32;
+    let mut places: Vec<Placement> = Vec::with_capacity(panels.len());
     for (k, panel) in panels.iter().enumerate() {
         let px = x + (k as u32 * each) as i32;
         canvas.text(
             px + each as i32 / 2,
             y + 2,
             panel.title,
-            font,
+            Canvas::fitting_size(panel.title, font, each.saturating_sub(6)),
             LEGEND_TEXT,
             Anchor::TopCenter,
         );
@@ -76,7 +82,14 @@ pub(crate) fn draw_comparison(
             y + title_h as i32,
             (each.saturating_sub(4), top_h),
         );
-        draw_backdrop(canvas, &place, &panel.backdrop);
+        match panel.backdrop {
+            Backdrop::SameAs(earlier) if earlier < k => {
+                let from = places[earlier];
+                canvas.copy_within((from.x, from.y, from.w, from.h), place.x, place.y);
+            }
+            _ => draw_backdrop(canvas, &place, &panel.backdrop),
+        }
+        places.push(place);
         for (object, patch) in objects.iter().zip(&panel.patches) {
             let (Some(patch), Some((x0, y0, x1, y1))) = (patch, crop_range(object.bbox, frame))
             else {
@@ -88,6 +101,21 @@ pub(crate) fn draw_comparison(
             }
         }
         draw_boxes(canvas, &place, objects, boxes.colormap, &boxes.scale);
+        if let Some(key) = &panel.key {
+            let side = (place.h / 4).min(place.w / 4);
+            if side >= 12 {
+                let kx = place.x + (place.w - side) as i32 - 3;
+                canvas.fill_rect(
+                    kx - 1,
+                    place.y + 2,
+                    kx + side as i32 + 1,
+                    place.y + side as i32 + 4,
+                    [20, 20, 20],
+                    0.8,
+                );
+                canvas.blit_scaled(key, kx, place.y + 3, side, side);
+            }
+        }
     }
     let gallery_y = y + (title_h + top_h) as i32 + 4;
     let gallery_h = (h as i32 - (gallery_y - y)).max(0) as u32;
@@ -98,6 +126,8 @@ pub(crate) fn draw_comparison(
 fn draw_backdrop(canvas: &mut Canvas, place: &Placement, backdrop: &Backdrop<'_>) {
     match backdrop {
         Backdrop::Image(image) => canvas.blit_scaled(image, place.x, place.y, place.w, place.h),
+        // A panel can only copy an earlier one; anything else leaves it empty.
+        Backdrop::SameAs(_) => {}
         Backdrop::Fill(color) => canvas.fill_rect(
             place.x,
             place.y,

@@ -4,6 +4,7 @@
 
 use image::{Rgb, RgbImage, RgbaImage};
 
+use crate::flow::color_wheel_legend;
 use crate::sequence::FlowField;
 
 use super::canvas::{Canvas, render_view};
@@ -12,7 +13,7 @@ use super::comparison::{Backdrop, BoxStyle, Panel, draw_comparison};
 use super::gallery::{ErrorGallery, gallery_items};
 use super::legend::short_number;
 use super::overlay::{SceneObject, ScoreScale};
-use super::patches::{colorized_map, flow_crop, max_or, patch_side, planar_flow};
+use super::patches::{colorized_map, error_range, flow_crop, max_or, patch_side, planar_flow};
 
 /// The data of the flow view; everything is borrowed.
 #[derive(Debug, Clone, Copy)]
@@ -49,6 +50,9 @@ impl Default for FlowViewOptions {
         }
     }
 }
+
+/// Side of the colour-wheel key image (drawn scaled to the panel).
+const WHEEL_KEY: u32 = 64;
 
 /// Colour where there is no flow.
 const NO_FLOW: [u8; 3] = [40, 40, 40];
@@ -102,25 +106,15 @@ pub(crate) fn draw_flow_view(
             );
             max_or([from_flow, from_recon], 1.0)
         });
-    let (error_range, auto) = match options.error_range {
-        Some(r) => (r, false),
-        None => {
-            let max = max_or(
-                input
-                    .objects
-                    .iter()
-                    .filter_map(|o| o.maps)
-                    .flat_map(|m| m.flow_error.iter().copied()),
-                1.0,
-            );
-            ((0.0, max), true)
-        }
-    };
+    let (errors, auto) = error_range(
+        options.error_range,
+        input
+            .objects
+            .iter()
+            .filter_map(|o| o.maps)
+            .flat_map(|m| m.flow_error.iter().copied()),
+    );
 
-    let flow_backdrop = || match flow {
-        Some(f) => Backdrop::Flow(f, range),
-        None => Backdrop::Fill(NO_FLOW),
-    };
     let flow_title = if flow.is_some() {
         format!(
             "flow (colour wheel, full colour at {} px)",
@@ -132,17 +126,22 @@ pub(crate) fn draw_flow_view(
     let panels = [
         Panel {
             title: &flow_title,
-            backdrop: flow_backdrop(),
+            backdrop: match flow {
+                Some(f) => Backdrop::Flow(f, range),
+                None => Backdrop::Fill(NO_FLOW),
+            },
             patches: Vec::new(),
+            key: flow.is_some().then(|| color_wheel_legend(WHEEL_KEY)),
         },
         Panel {
             title: "reconstruction (memory autoencoder)",
-            backdrop: flow_backdrop(),
+            backdrop: Backdrop::SameAs(0),
             patches: input
                 .objects
                 .iter()
                 .map(|o| o.maps.map(|m| planar_flow(&m.recon_flow, range)))
                 .collect(),
+            key: None,
         },
         Panel {
             title: "reconstruction error",
@@ -152,9 +151,10 @@ pub(crate) fn draw_flow_view(
                 .iter()
                 .map(|o| {
                     o.maps
-                        .map(|m| colorized_map(&m.flow_error, options.colormap, error_range))
+                        .map(|m| colorized_map(&m.flow_error, options.colormap, errors))
                 })
                 .collect(),
+            key: None,
         },
     ];
 
@@ -169,7 +169,7 @@ pub(crate) fn draw_flow_view(
         Some(vec![
             actual,
             planar_flow(&maps.recon_flow, range),
-            colorized_map(&maps.flow_error, options.colormap, error_range),
+            colorized_map(&maps.flow_error, options.colormap, errors),
         ])
     });
     let gallery = ErrorGallery {
@@ -177,7 +177,7 @@ pub(crate) fn draw_flow_view(
         total,
         titles: &["flow", "reconstruction", "error"],
         colormap: options.colormap,
-        range: error_range,
+        range: errors,
         bar_title: if auto {
             "squared error, px² (auto range)"
         } else {

@@ -8,7 +8,7 @@ use crate::score::{FusionWeights, Heatmap};
 
 use super::canvas::{Anchor, Canvas, render_view};
 use super::colormap::Colormap;
-use super::legend::{LEGEND_TEXT, colour_bar, short_number};
+use super::legend::{LEGEND_TEXT, colour_bar};
 use super::overlay::{Placement, SceneObject, ScoreScale, draw_boxes, draw_mask_contour};
 
 /// Colour of the ground-truth anomaly contour.
@@ -92,11 +92,8 @@ impl Caption {
         };
         let weights = self.weights.map_or(String::new(), |w| {
             format!(
-                " · weights frame {}/{} pixel {}/{}",
-                short_number(w.w_r),
-                short_number(w.w_p),
-                short_number(w.w_r_p),
-                short_number(w.w_p_p)
+                " · weights w_r {} w_p {} (pixels: {}, {})",
+                w.w_r, w.w_p, w.w_r_p, w.w_p_p
             )
         });
         [first, format!("{score}{weights}")]

@@ -101,12 +101,12 @@ fn draw_gallery(
     }
     let header = if total > items.len() {
         format!(
-            "{} highest-scoring of {total} objects: {}",
+            "{} highest-scoring of {total} objects (#track · object score): {}",
             items.len(),
             titles.join(" | ")
         )
     } else {
-        format!("per object: {}", titles.join(" | "))
+        format!("per object (#track · object score): {}", titles.join(" | "))
     };
     canvas.text(x + 4, y, &header, font, LEGEND_TEXT, Anchor::TopLeft);
     let (y, h) = (y + line as i32, h.saturating_sub(line));
@@ -171,10 +171,10 @@ pub(crate) fn gallery_items(
     (items, total)
 }
 
-/// "#track score" of a gallery entry.
+/// "#track · score" of a gallery entry.
 fn object_label(object: &SceneObject<'_>) -> String {
     match object.score {
-        Some(s) => format!("#{} {s:.1}", object.track_id),
+        Some(s) => format!("#{} · {s:.1}", object.track_id),
         None => format!("#{}", object.track_id),
     }
 }

@@ -8,8 +8,9 @@ use super::colormap::Colormap;
 pub(crate) const LEGEND_TEXT: [u8; 3] = [230, 230, 230];
 
 /// Draws a vertical colour bar in columns `x..x+w`, rows `y..y+h`: `title` above the bar
-/// (wrapped on spaces into two lines when it is wider than the bar), `high` at its top and
-/// `low` at its bottom, labels to the right of a bar a third of `w` wide.
+/// (wrapped on spaces into two lines when it is wider than the bar), `high` at its top (as
+/// "≥ high": larger values take the top colour) and `low` at its bottom, labels to the right
+/// of a bar a third of `w` wide.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn colour_bar(
     canvas: &mut Canvas,
@@ -62,7 +63,7 @@ pub(crate) fn colour_bar(
     canvas.text(
         lx,
         top,
-        &short_number(high),
+        &format!("≥{}", short_number(high)),
         size,
         LEGEND_TEXT,
         Anchor::TopLeft,

@@ -117,6 +117,18 @@ pub(crate) fn flow_crop(
     Some(out)
 }
 
+/// The colour range of error maps: `fixed` when given, else 0 to the largest of `errors`
+/// (1 when none is above 0); and whether it is that automatic range.
+pub(crate) fn error_range(
+    fixed: Option<(f32, f32)>,
+    errors: impl IntoIterator<Item = f32>,
+) -> ((f32, f32), bool) {
+    match fixed {
+        Some(range) => (range, false),
+        None => ((0.0, max_or(errors, 1.0)), true),
+    }
+}
+
 /// Largest finite value of `values`, or `fallback` when there is none above 0.
 pub(crate) fn max_or(values: impl IntoIterator<Item = f32>, fallback: f32) -> f32 {
     let max = values

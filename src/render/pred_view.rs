@@ -9,7 +9,7 @@ use super::colormap::Colormap;
 use super::comparison::{Backdrop, BoxStyle, Panel, draw_comparison};
 use super::gallery::{ErrorGallery, gallery_items};
 use super::overlay::{SceneObject, ScoreScale};
-use super::patches::{colorized_map, frame_crop, max_or, patch_side, planar_rgb};
+use super::patches::{colorized_map, error_range, frame_crop, patch_side, planar_rgb};
 
 /// The data of the prediction view; everything is borrowed.
 #[derive(Debug, Clone, Copy)]
@@ -70,27 +70,23 @@ pub(crate) fn draw_pred_view(
             title: "actual frame",
             backdrop: Backdrop::Image(input.frame),
             patches: Vec::new(),
+            key: None,
         },
         Panel {
             title: "predicted: model's patches pasted into the boxes",
-            backdrop: Backdrop::Image(input.frame),
+            backdrop: Backdrop::SameAs(0),
             patches: predicted,
+            key: None,
         },
     ];
-    let (range, auto) = match options.error_range {
-        Some(r) => (r, false),
-        None => {
-            let max = max_or(
-                input
-                    .objects
-                    .iter()
-                    .filter_map(|o| o.maps)
-                    .flat_map(|m| m.frame_error.iter().copied()),
-                1.0,
-            );
-            ((0.0, max), true)
-        }
-    };
+    let (range, auto) = error_range(
+        options.error_range,
+        input
+            .objects
+            .iter()
+            .filter_map(|o| o.maps)
+            .flat_map(|m| m.frame_error.iter().copied()),
+    );
     let (items, total) = gallery_items(input.objects, |_, object, maps| {
         let p = patch_side(maps.predicted.len(), 3);
         Some(vec![

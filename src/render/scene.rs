@@ -17,7 +17,7 @@ use crate::sequence::{FlowField, FrameId, Scenario};
 use super::colormap::Colormap;
 use super::dashboard::DashboardOptions;
 use super::error::RenderError;
-use super::frame_view::{Caption, HeatRange, REFERENCE_RANGE_IQR};
+use super::frame_view::{Caption, FrameViewInput, HeatRange, REFERENCE_RANGE_IQR};
 use super::overlay::{SceneObject, ScoreScale};
 use super::timeline::TimelineInput;
 use crate::model::PixelStats;
@@ -241,6 +241,22 @@ impl FrameScene {
             threshold: Some(settings.threshold),
             weights: Some(settings.weights),
             truth: series.truth.get(self.index).copied(),
+        }
+    }
+
+    /// The frame view's input: this frame with `objects` (from [`Self::scene_objects`]),
+    /// its heatmap, truth mask and `caption`.
+    pub fn frame_input<'a>(
+        &'a self,
+        objects: &'a [SceneObject<'a>],
+        caption: Option<&'a Caption>,
+    ) -> FrameViewInput<'a> {
+        FrameViewInput {
+            frame: &self.frame,
+            objects,
+            heatmap: self.heatmap.as_ref(),
+            anomaly_mask: self.mask.as_deref(),
+            caption,
         }
     }
 

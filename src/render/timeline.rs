@@ -290,27 +290,39 @@ fn draw_series(
             hi = hi.max(p);
         }
         let (y_lo, y_hi) = (row_of(lo, rows, range), row_of(hi, rows, range));
-        canvas.line(x, y_lo, x, y_hi, color);
-        if thick {
-            canvas.line(x, y_lo - 1, x, y_hi - 1, color);
-        }
+        // Thick lines extend one row upwards, as the polyline's second stroke does.
+        canvas.vline(x, y_lo, y_hi - i32::from(thick), color);
         previous = Some(last);
     }
 }
 
-/// Fills the columns of `rows` whose frames satisfy `pick` (`Some(colour)`).
+/// The colour `pick` gives the frames of each plot column (`None` = nothing).
+fn column_colors(
+    layout: &TimelineLayout,
+    mut pick: impl FnMut(Range<usize>) -> Option<[u8; 3]>,
+) -> Vec<Option<[u8; 3]>> {
+    (0..layout.width())
+        .map(|c| pick(layout.column_frames(c)))
+        .collect()
+}
+
+/// Fills the plot columns of `rows` with their `colors` at opacity `alpha`, each run of
+/// equal colours as one rectangle.
 fn draw_lane(
     canvas: &mut Canvas,
     layout: &TimelineLayout,
     rows: &Range<i32>,
     alpha: f32,
-    mut pick: impl FnMut(Range<usize>) -> Option<[u8; 3]>,
+    colors: &[Option<[u8; 3]>],
 ) {
-    for c in 0..layout.width() {
-        if let Some(color) = pick(layout.column_frames(c)) {
+    let mut c = 0;
+    while c < colors.len() {
+        let run = colors[c..].iter().take_while(|k| **k == colors[c]).count();
+        if let Some(color) = colors[c] {
             let x = layout.plot_x.start + c as i32;
-            canvas.fill_rect(x, rows.start, x + 1, rows.end, color, alpha);
+            canvas.fill_rect(x, rows.start, x + run as i32, rows.end, color, alpha);
         }
+        c += run;
     }
 }
 
@@ -482,13 +494,10 @@ pub(crate) fn draw_timeline(
     } else {
         layout.score_y.end
     };
-    draw_lane(canvas, &layout, &panels, 0.16, |r| {
-        truth(r).then_some(TRUTH)
-    });
-    draw_lane(canvas, &layout, &layout.truth_y, 0.9, |r| {
-        truth(r).then_some(TRUTH)
-    });
-    draw_lane(canvas, &layout, &layout.labels_y, 0.9, |r| {
+    let truth_colors = column_colors(&layout, |r| truth(r).then_some(TRUTH));
+    draw_lane(canvas, &layout, &panels, 0.16, &truth_colors);
+    draw_lane(canvas, &layout, &layout.truth_y, 0.9, &truth_colors);
+    let label_colors = column_colors(&layout, |r| {
         let slice = input
             .labels
             .get(r.start.min(input.labels.len())..r.end.min(input.labels.len()))?;
@@ -500,7 +509,17 @@ pub(crate) fn draw_timeline(
             None
         }
     });
-    for (rows, name) in [(&layout.truth_y, "truth"), (&layout.labels_y, "labels")] {
+    draw_lane(canvas, &layout, &layout.labels_y, 0.9, &label_colors);
+    let labels_name = if label_colors.iter().any(Option::is_some) {
+        "labels"
+    } else {
+        "no labels"
+    };
+    for (rows, name) in [
+        (&layout.truth_y, "truth"),
+        (&layout.labels_y, labels_name),
+        (&layout.axis_y, "frame"),
+    ] {
         if rows.end - rows.start >= 8 {
             let font = f64::from(rows.end - rows.start).min(layout.font);
             canvas.text(
@@ -540,13 +559,15 @@ pub(crate) fn draw_timeline(
         let y = row_of(t, &layout.score_y, score_range);
         dashed(canvas, &layout, y, THRESHOLD);
         let text = format!("threshold {}", short_number(t));
-        canvas.text(
-            layout.plot_x.end - 4,
-            y - layout.font as i32 - 3,
+        let (tw, th) = Canvas::text_size(&text, layout.font);
+        let pad = (layout.font / 5.0).ceil() as i32;
+        canvas.label(
+            layout.plot_x.end - tw as i32 - 2 * pad - 2,
+            (y - th as i32 - 2 * pad - 2).max(layout.score_y.start),
             &text,
             layout.font,
             THRESHOLD,
-            Anchor::TopRight,
+            [20, 20, 20],
         );
     }
     if has_components {
@@ -581,8 +602,12 @@ pub(crate) fn draw_timeline(
         items.push((Z_P, "z(S_p) frame"));
     }
     items.push((TRUTH, "ground-truth anomaly"));
-    items.push((LABEL_ANOMALY, "label: anomaly"));
-    items.push((LABEL_NORMAL, "label: normal"));
+    if label_colors.contains(&Some(LABEL_ANOMALY)) {
+        items.push((LABEL_ANOMALY, "label: anomaly"));
+    }
+    if label_colors.contains(&Some(LABEL_NORMAL)) {
+        items.push((LABEL_NORMAL, "label: normal"));
+    }
     legend_row(canvas, layout.plot_x.start, 2, layout.font, &items);
 
     if let Some(cursor) = input.cursor.filter(|c| frames.contains(c)) {

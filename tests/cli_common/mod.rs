@@ -16,6 +16,28 @@ pub fn vadscope(args: &[&str]) -> Output {
         .expect("the vadscope binary runs")
 }
 
+/// The arguments of `vadscope generate` for one 12-frame 96×64 normal city scenario in sun
+/// with `seed`, written under `out`.
+pub fn tiny_generate_args<'a>(out: &'a str, seed: &'a str) -> [&'a str; 15] {
+    [
+        "generate",
+        "--out",
+        out,
+        "--kind",
+        "normal",
+        "--domain",
+        "city",
+        "--weather",
+        "sun",
+        "--frames",
+        "12",
+        "--size",
+        "96x64",
+        "--seed",
+        seed,
+    ]
+}
+
 /// Process output as text, for messages and `contains` checks.
 pub fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()

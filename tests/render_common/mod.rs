@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 use image::{GrayImage, Luma, Rgb, RgbImage};
+use vadscope::render::SceneObject;
 use vadscope::score::{Heatmap, ObjectMaps};
 use vadscope::sequence::FlowField;
 
@@ -50,6 +51,21 @@ pub fn boxes(w: u32, h: u32) -> [[f32; 4]; 2] {
         [0.05 * w, 0.55 * h, 0.25 * w, 0.85 * h],
         [0.3 * w, 0.3 * h, 0.55 * w, 0.55 * h],
     ]
+}
+
+/// The two [`boxes`] of a `w`×`h` frame as scored objects (tracks 1 and 2, scores 10 and
+/// 50) with `maps` (one per object; fewer leave the rest without maps).
+pub fn objects(w: u32, h: u32, maps: &[ObjectMaps]) -> Vec<SceneObject<'_>> {
+    boxes(w, h)
+        .iter()
+        .enumerate()
+        .map(|(k, b)| SceneObject {
+            bbox: *b,
+            track_id: k as u64 + 1,
+            score: Some(10.0 + 40.0 * k as f64),
+            maps: maps.get(k),
+        })
+        .collect()
 }
 
 /// A heatmap of `w`×`h` that is 0 outside the boxes and rises inside them.
