@@ -6,19 +6,21 @@
 use std::ops::Range;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::AtomicBool;
 
 use anyhow::Context;
 use clap::Args;
 use vadscope::annotate::{LabelFormat, export_labels};
-use vadscope::render::{
-    self, Colormap, FrameScene, FrameViewInput, Provenance, ScoreSeries, scores_csv,
+use vadscope::export::{
+    FileNaming, FrameRenderer, FrameView, FramesExport, export_frames, write_scores_csv,
 };
-use vadscope::score::PixelReferenceMode;
+use vadscope::render::Colormap;
+use vadscope::score::FlowSource;
 use vadscope::sequence::Scenario;
 use vadscope::synth::parse_size;
 
 use super::labels::{open_editor, parse_format};
-use super::render::{frames_in, open_scored, parse_frames, save_png, settings_of};
+use super::render::{frames_in, open_scored, parse_frames, settings_of};
 use super::score_cache::ScoreArgs;
 
 /// Options of `vadscope export`.
@@ -67,68 +69,40 @@ pub fn run(args: ExportArgs) -> anyhow::Result<ExitCode> {
     }
     let (scenario, cache, model) = open_scored(&args.scenario, &args.scores)?;
     let settings = settings_of(&args.scores, args.colormap, args.auto_range);
-    let table = cache.table();
-    let series = ScoreSeries::compute(
-        table,
+    let renderer = FrameRenderer::new(
+        &scenario,
+        &cache,
         &scenario.frame_labels().flags,
-        &settings.weights,
-        settings.median_kernel,
+        settings,
+        FlowSource::default(),
     );
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let provenance = Provenance {
-        version: env!("CARGO_PKG_VERSION").to_string(),
-        scenario: scenario.name().to_string(),
-        model: model.display().to_string(),
-        model_hash: table.meta.key.model.0,
-        boxes: table.meta.key.boxes.clone(),
-        flow: table.meta.key.flow.clone(),
-        weights: settings.weights,
-        median_kernel: settings.median_kernel,
-        threshold: settings.threshold,
-    };
+    let provenance = renderer.provenance(&model);
     let frames = if args.no_frames {
         None
     } else {
         Some(frames_in(&scenario, args.frames.as_ref())?)
     };
-    let csv_path = args.out.join("scores.csv");
-    std::fs::write(&csv_path, scores_csv(table, &series, &provenance))
-        .with_context(|| format!("cannot write {}", csv_path.display()))?;
+    write_scores_csv(
+        &args.out.join("scores.csv"),
+        cache.table(),
+        renderer.series(),
+        &provenance,
+    )?;
     let mut written = 1;
     if let Some(frames) = frames {
-        let dir = args.out.join("frames");
-        std::fs::create_dir_all(&dir)
-            .with_context(|| format!("cannot create {}", dir.display()))?;
-        let options = settings.options(table).frame;
-        let name = scenario.name().to_string();
-        for index in frames {
-            let scene = FrameScene::load(
-                &scenario,
-                &cache,
-                index,
-                &settings.weights,
-                PixelReferenceMode::Training,
-                None,
-            )?;
-            let objects = scene.scene_objects();
-            let caption = scene.caption(&name, &series, &settings);
-            let input = FrameViewInput {
-                frame: &scene.frame,
-                objects: &objects,
-                heatmap: scene.heatmap.as_ref(),
-                anomaly_mask: scene.mask.as_deref(),
-                caption: Some(&caption),
-            };
-            let size = args
-                .size
-                .unwrap_or_else(|| render::natural_size(scene.frame.dimensions(), &options));
-            save_png(
-                &render::frame_view(&input, &options, size),
-                &dir.join(format!("frame_{index:05}.png")),
-            )?;
-            written += 1;
-        }
+        let request = FramesExport {
+            out: args.out.clone(),
+            frames,
+            views: vec![FrameView::Frame],
+            size: args.size,
+            png: true,
+            gif: false,
+            naming: FileNaming::FramesFolder,
+        };
+        let summary = export_frames(&renderer, &request, &mut |_| {}, &AtomicBool::new(false))?;
+        written += summary.files.len();
     }
     written += write_labels(&scenario, &args.labels, &args.out)?;
     println!("wrote {written} files to {}", args.out.display());
