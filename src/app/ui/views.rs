@@ -186,7 +186,10 @@ pub fn main_image(state: &AppState, size: (u32, u32)) -> Result<Option<ViewImage
                 caption: Some(&caption),
             };
             let frame = scene.frame.dimensions();
-            let (scale, view) = fit_frame_view(frame, &options.frame, size);
+            // render leaves the colour bar out when there is no heatmap (unscored).
+            let mut fit = options.frame.clone();
+            fit.heatmap &= scene.heatmap.is_some();
+            let (scale, view) = fit_frame_view(frame, &fit, size);
             let scaled_h = (frame.1 as f32 * scale).round();
             frame_place = Some((
                 0.0,
