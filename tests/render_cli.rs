@@ -2,25 +2,60 @@
 //! random checkpoint made here; the commands score it (no cache yet), write every view, a
 //! GIF, annotated frames and a `scores.csv` that parses; bad input fails with a message.
 
+mod cli_common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use burn::tensor::Device;
+use cli_common::{scenario_folders, text, vadscope};
 use vadscope::eval::MeanStd;
 use vadscope::model::{
     CheckpointMeta, Hf2Vad, ModelConfig, NoiseRng, PixelStats, TrainingStats, save_checkpoint,
 };
 
-fn vadscope(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vadscope"))
-        .args(args)
-        .env_remove("VADSCOPE_MODEL")
-        .output()
-        .expect("the vadscope binary runs")
+/// Runs `vadscope COMMAND SCENARIO --out OUT [--model MODEL] EXTRA...`.
+fn on_scenario(
+    command: &str,
+    scenario: &Path,
+    model: Option<&Path>,
+    out: &Path,
+    extra: &[&str],
+) -> Output {
+    let mut args = vec![
+        command,
+        scenario.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    if let Some(model) = model {
+        args.extend(["--model", model.to_str().unwrap()]);
+    }
+    args.extend_from_slice(extra);
+    vadscope(&args)
 }
 
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
+/// Like [`on_scenario`], asserting that the command succeeds.
+fn succeed(command: &str, scenario: &Path, model: &Path, out: &Path, extra: &[&str]) {
+    let run = on_scenario(command, scenario, Some(model), out, extra);
+    assert!(
+        run.status.success(),
+        "{command} {extra:?} failed: {}",
+        text(&run.stderr)
+    );
+}
+
+/// Like [`on_scenario`], asserting that the command fails; returns its stderr.
+fn fail(
+    command: &str,
+    scenario: &Path,
+    model: Option<&Path>,
+    out: &Path,
+    extra: &[&str],
+) -> String {
+    let run = on_scenario(command, scenario, model, out, extra);
+    assert!(!run.status.success(), "{command} {extra:?} succeeded");
+    text(&run.stderr)
 }
 
 fn pixel_stats(median: f64, iqr: f64) -> PixelStats {
@@ -84,16 +119,7 @@ fn tiny_scenario(dir: &Path) -> PathBuf {
         "generate failed: {}",
         text(&out.stderr)
     );
-    std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .find(|p| {
-            p.file_name()
-                .unwrap()
-                .to_string_lossy()
-                .starts_with("Scenario_")
-        })
-        .expect("a scenario folder")
+    scenario_folders(dir).pop().expect("a scenario folder")
 }
 
 #[test]
@@ -102,24 +128,23 @@ fn render_scores_then_writes_every_view_and_a_gif() {
     let scenario = tiny_scenario(dir.path());
     let model = tiny_checkpoint(dir.path());
     let out = dir.path().join("views");
-    let run = vadscope(&[
+    succeed(
         "render",
-        scenario.to_str().unwrap(),
-        "--model",
-        model.to_str().unwrap(),
-        "--frames",
-        "5..8",
-        "--view",
-        "dashboard,frame,pred,flow,timeline,roc",
-        "--size",
-        "320x200",
-        "--gif",
-        "--colormap",
-        "viridis",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(run.status.success(), "render failed: {}", text(&run.stderr));
+        &scenario,
+        &model,
+        &out,
+        &[
+            "--frames",
+            "5..8",
+            "--view",
+            "dashboard,frame,pred,flow,timeline,roc",
+            "--size",
+            "320x200",
+            "--gif",
+            "--colormap",
+            "viridis",
+        ],
+    );
     for view in ["dashboard", "frame", "pred", "flow"] {
         for index in 5..8 {
             let path = out.join(format!("{view}_{index:05}.png"));
@@ -147,26 +172,21 @@ fn render_scores_then_writes_every_view_and_a_gif() {
 
     // A second run finds the cache and gives the same pixels.
     let again = dir.path().join("again");
-    let run = vadscope(&[
+    succeed(
         "render",
-        scenario.to_str().unwrap(),
-        "--model",
-        model.to_str().unwrap(),
-        "--frames",
-        "6",
-        "--view",
-        "frame",
-        "--size",
-        "320x200",
-        "--colormap",
-        "viridis",
-        "--out",
-        again.to_str().unwrap(),
-    ]);
-    assert!(
-        run.status.success(),
-        "second render failed: {}",
-        text(&run.stderr)
+        &scenario,
+        &model,
+        &again,
+        &[
+            "--frames",
+            "6",
+            "--view",
+            "frame",
+            "--size",
+            "320x200",
+            "--colormap",
+            "viridis",
+        ],
     );
     let a = std::fs::read(out.join("frame_00006.png")).unwrap();
     let b = std::fs::read(again.join("frame_00006.png")).unwrap();
@@ -179,21 +199,20 @@ fn export_writes_annotated_frames_and_a_scores_csv_with_provenance() {
     let scenario = tiny_scenario(dir.path());
     let model = tiny_checkpoint(dir.path());
     let out = dir.path().join("export");
-    let run = vadscope(&[
+    succeed(
         "export",
-        scenario.to_str().unwrap(),
-        "--model",
-        model.to_str().unwrap(),
-        "--frames",
-        "0..3",
-        "--preset",
-        "ad-code",
-        "--threshold",
-        "1.5",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(run.status.success(), "export failed: {}", text(&run.stderr));
+        &scenario,
+        &model,
+        &out,
+        &[
+            "--frames",
+            "0..3",
+            "--preset",
+            "ad-code",
+            "--threshold",
+            "1.5",
+        ],
+    );
     for index in 0..3 {
         assert!(out.join(format!("frames/frame_{index:05}.png")).is_file());
     }
@@ -246,61 +265,38 @@ fn export_writes_annotated_frames_and_a_scores_csv_with_provenance() {
 fn bad_input_fails_with_a_message() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let missing = vadscope(&[
+    let missing = fail(
         "render",
-        "/nonexistent/scenario",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(!missing.status.success());
-    assert!(
-        text(&missing.stderr).contains("/nonexistent/scenario"),
-        "{}",
-        text(&missing.stderr)
+        Path::new("/nonexistent/scenario"),
+        None,
+        &out,
+        &[],
     );
+    assert!(missing.contains("/nonexistent/scenario"), "{missing}");
 
     let scenario = tiny_scenario(dir.path());
-    let weights = vadscope(&[
-        "render",
-        scenario.to_str().unwrap(),
-        "--weights",
-        "1,2,3",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(!weights.status.success());
-    assert!(
-        text(&weights.stderr).contains("four numbers"),
-        "{}",
-        text(&weights.stderr)
-    );
+    let weights = fail("render", &scenario, None, &out, &["--weights", "1,2,3"]);
+    assert!(weights.contains("four numbers"), "{weights}");
 
     let model = tiny_checkpoint(dir.path());
-    let range = vadscope(&[
+    let range = fail(
         "export",
-        scenario.to_str().unwrap(),
-        "--model",
-        model.to_str().unwrap(),
-        "--frames",
-        "50..60",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(!range.status.success());
-    let stderr = text(&range.stderr);
+        &scenario,
+        Some(&model),
+        &out,
+        &["--frames", "50..60"],
+    );
     assert!(
-        stderr.contains("12 frames") && !stderr.contains("panicked"),
-        "{stderr}"
+        range.contains("12 frames") && !range.contains("panicked"),
+        "{range}"
     );
 
-    let no_model = vadscope(&[
+    let no_model = fail(
         "export",
-        scenario.to_str().unwrap(),
-        "--model",
-        "/nonexistent.safetensors",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(!no_model.status.success());
-    assert!(text(&no_model.stderr).contains("/nonexistent.safetensors"));
+        &scenario,
+        Some(Path::new("/nonexistent.safetensors")),
+        &out,
+        &[],
+    );
+    assert!(no_model.contains("/nonexistent.safetensors"), "{no_model}");
 }

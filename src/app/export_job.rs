@@ -146,7 +146,7 @@ fn run(
         &scenario,
         &cache,
         &request.labels,
-        request.settings.clone(),
+        request.settings,
         request.options.clone(),
         request.flow,
     );

@@ -9,6 +9,7 @@ mod generate;
 mod inspect;
 mod labels;
 mod render;
+mod scenario_views;
 mod score;
 mod score_cache;
 mod train;

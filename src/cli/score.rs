@@ -184,6 +184,11 @@ impl Scorer {
         })
     }
 
+    /// The checkpoint this scorer scores with.
+    pub fn checkpoint(&self) -> &Path {
+        &self.checkpoint
+    }
+
     fn say(&self, line: &str) {
         match self.report {
             Report::Stdout => println!("{line}"),

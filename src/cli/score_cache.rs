@@ -1,30 +1,27 @@
 //! What `render` and `export` share: the options that choose the scores (model, boxes,
-//! weights, threshold) and getting a current score cache for them, scoring first (with a
-//! progress bar) when there is none.
+//! flow source, weights, threshold) and getting a current score cache for them through
+//! `vadscope score`'s [`Scorer`], which scores first (with a progress bar) when there is none.
 
 use std::path::PathBuf;
-use std::sync::atomic::AtomicBool;
 
-use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
-use indicatif::{ProgressBar, ProgressStyle};
-use vadscope::model::{Detector, bundled_model};
 use vadscope::render::reference_threshold;
-use vadscope::score::{
-    BoxSource, FlowSource, FusionWeights, ModelKey, MotionParams, ScoreCache, ScoreRequest,
-    score_scenario,
-};
+use vadscope::score::{BoxSource, FusionWeights, ScoreCache};
 use vadscope::sequence::Scenario;
+
+use super::score::{Report, RunArgs, Scorer, parse_box_source};
 
 /// Options that choose which scores a view shows.
 #[derive(Debug, Args)]
 pub struct ScoreArgs {
-    /// Checkpoint to score with (default: the bundled model).
-    #[arg(long)]
-    pub model: Option<PathBuf>,
-    /// Boxes of the scored objects: ground truth or detector-free motion boxes.
-    #[arg(long, value_enum, default_value_t = BoxArg::Gt)]
-    pub boxes: BoxArg,
+    /// Where the boxes of the scored objects come from: `gt` (ground truth), `det` (the
+    /// scenario's BBOX_2D_DET), `motion` (detector-free motion boxes), `gt+motion`,
+    /// `det+motion`, or a detection file (MOT `.txt`, COCO `.json`, a YOLO folder,
+    /// `boxes.csv`).
+    #[arg(long, default_value = "gt", value_name = "gt|det|motion|FILE", value_parser = parse_box_source)]
+    pub boxes: BoxSource,
+    #[command(flatten)]
+    pub run: RunArgs,
     /// Fusion weights as w_r,w_p,w_r_p,w_p_p (frame level, then pixel level).
     #[arg(long, value_name = "WR,WP,WRP,WPP", conflicts_with = "preset", value_parser = parse_weights)]
     pub weights: Option<FusionWeights>,
@@ -38,15 +35,6 @@ pub struct ScoreArgs {
     /// Median-filter kernel of the filtered score (odd; 1 = none).
     #[arg(long, default_value_t = 17)]
     pub median_kernel: usize,
-}
-
-/// Box sources offered on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum BoxArg {
-    /// The scenario's ground-truth boxes.
-    Gt,
-    /// Detector-free boxes from frame differences.
-    Motion,
 }
 
 /// Weight presets offered on the command line.
@@ -105,60 +93,15 @@ impl ScoreArgs {
         self.threshold
             .unwrap_or_else(|| reference_threshold(&self.fusion_weights()))
     }
-
-    /// The box source asked for.
-    pub fn box_source(&self) -> BoxSource {
-        match self.boxes {
-            BoxArg::Gt => BoxSource::GroundTruth,
-            BoxArg::Motion => BoxSource::Motion(MotionParams::default()),
-        }
-    }
-
-    /// The checkpoint to use.
-    pub fn model_path(&self) -> anyhow::Result<PathBuf> {
-        match &self.model {
-            Some(path) if path.is_file() => Ok(path.clone()),
-            Some(path) => bail!("model {} does not exist", path.display()),
-            None => Ok(bundled_model()?),
-        }
-    }
 }
 
-/// A current score cache of `scenario` for `args`, and the checkpoint it came from.
+/// A current score cache of `scenario` for `args`, and the checkpoint it came from: the
+/// cache on disk when it is current, else one scored now (reported on standard error).
 pub fn current_cache(
     scenario: &Scenario,
     args: &ScoreArgs,
 ) -> anyhow::Result<(ScoreCache, PathBuf)> {
-    let model = args.model_path()?;
-    let key = ModelKey::of_checkpoint(&model)?;
-    let request = ScoreRequest::new(args.box_source(), FlowSource::default());
-    let cache_key = request.key(scenario, key)?;
-    if let Some(cache) = ScoreCache::lookup(scenario, &cache_key)? {
-        return Ok((cache, model));
-    }
-    let detector = Detector::from_checkpoint(&model)
-        .with_context(|| format!("loading model {}", model.display()))?;
-    let bar = ProgressBar::new(scenario.len() as u64).with_style(
-        ProgressStyle::with_template(
-            "{prefix:>12} [{bar:40}] {pos}/{len} frames ({per_sec}, eta {eta}) {msg}",
-        )
-        .expect("static progress template")
-        .progress_chars("=> "),
-    );
-    bar.set_prefix("scoring");
-    let cancel = AtomicBool::new(false);
-    let cache = score_scenario(
-        scenario,
-        &detector,
-        key,
-        &request,
-        &mut |p| {
-            bar.set_position(p.frames_done as u64);
-            bar.set_message(format!("{} objects", p.objects));
-        },
-        &cancel,
-    )
-    .with_context(|| format!("scoring {}", scenario.root().display()))?;
-    bar.finish_and_clear();
-    Ok((cache, model))
+    let mut scorer = Scorer::new(&args.run, Report::Stderr)?;
+    let cache = scorer.cache_for(scenario, &args.boxes, false)?;
+    Ok((cache, scorer.checkpoint().to_path_buf()))
 }

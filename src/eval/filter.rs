@@ -10,21 +10,30 @@ pub fn median_filter(values: &[f64], kernel: usize) -> Vec<f64> {
         return values.to_vec();
     }
     let half = kernel / 2;
-    let width = 2 * half + 1;
-    let mut window = vec![0.0f64; width];
-    (0..values.len())
-        .map(|i| {
-            for (k, slot) in window.iter_mut().enumerate() {
-                *slot = (i + k)
-                    .checked_sub(half)
-                    .and_then(|j| values.get(j))
-                    .copied()
-                    .unwrap_or(0.0);
-            }
-            let (_, median, _) = window.select_nth_unstable_by(half, |a, b| a.total_cmp(b));
-            *median
-        })
-        .collect()
+    // Sample `j` of the zero-padded signal.
+    let padded = |j: isize| {
+        usize::try_from(j)
+            .ok()
+            .and_then(|j| values.get(j))
+            .copied()
+            .unwrap_or(0.0)
+    };
+    // The window kept sorted as it slides: one removal and one insertion per sample instead
+    // of a selection over the whole window, which is what keeps a slider move over 100,000
+    // frames inside one frame time.
+    let mut window: Vec<f64> = (-(half as isize)..=half as isize).map(padded).collect();
+    window.sort_unstable_by(f64::total_cmp);
+    let mut filtered = Vec::with_capacity(values.len());
+    for i in 0..values.len() as isize {
+        filtered.push(window[half]);
+        let outgoing = padded(i - half as isize);
+        let at = window.partition_point(|v| v.total_cmp(&outgoing).is_lt());
+        window.remove(at);
+        let incoming = padded(i + half as isize + 1);
+        let at = window.partition_point(|v| v.total_cmp(&incoming).is_lt());
+        window.insert(at, incoming);
+    }
+    filtered
 }
 
 #[cfg(test)]
@@ -44,5 +53,31 @@ mod tests {
         assert_eq!(median_filter(&x, 3), vec![1.0, 1.0, 1.0, 1.0, 1.0]);
         assert_eq!(median_filter(&x, 2), median_filter(&x, 3));
         assert_eq!(median_filter(&x, 1), x.to_vec());
+    }
+
+    #[test]
+    fn sliding_window_equals_a_fresh_sort_of_every_window() {
+        let x: Vec<f64> = (0..200u64)
+            .map(|i| ((i * 7919) % 101) as f64 - 50.0 + if i % 13 == 0 { 0.5 } else { 0.0 })
+            .collect();
+        for kernel in [3, 5, 17, 31, 401] {
+            let half = kernel / 2;
+            let expected: Vec<f64> = (0..x.len())
+                .map(|i| {
+                    let mut w: Vec<f64> = (0..kernel)
+                        .map(|k| {
+                            (i + k)
+                                .checked_sub(half)
+                                .and_then(|j| x.get(j))
+                                .copied()
+                                .unwrap_or(0.0)
+                        })
+                        .collect();
+                    w.sort_by(f64::total_cmp);
+                    w[half]
+                })
+                .collect();
+            assert_eq!(median_filter(&x, kernel), expected, "kernel {kernel}");
+        }
     }
 }

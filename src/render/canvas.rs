@@ -3,6 +3,9 @@
 //! the same inputs give the same bytes everywhere). Charts draw on it through plotters'
 //! bitmap backend ([`Canvas::plotters`]).
 
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::rc::Rc;
 use std::sync::OnceLock;
 
 use image::{RgbImage, RgbaImage};
@@ -56,6 +59,21 @@ impl Anchor {
     }
 }
 
+/// Background of every view.
+pub(crate) const BACKGROUND: [u8; 3] = [24, 26, 30];
+
+/// A view of `size` (width, height): a canvas on [`BACKGROUND`] that `draw` fills, given
+/// the whole canvas as a rectangle (x, y, w, h).
+pub(crate) fn render_view(
+    size: (u32, u32),
+    draw: impl FnOnce(&mut Canvas, (i32, i32, u32, u32)),
+) -> RgbaImage {
+    let mut canvas = Canvas::new(size.0, size.1, BACKGROUND);
+    let rect = (0, 0, canvas.width(), canvas.height());
+    draw(&mut canvas, rect);
+    canvas.into_rgba()
+}
+
 /// An RGB raster, row-major, 3 bytes per pixel.
 pub(crate) struct Canvas {
     width: u32,
@@ -70,10 +88,7 @@ impl Canvas {
     pub(crate) fn new(width: u32, height: u32, background: [u8; 3]) -> Self {
         ensure_font();
         let (width, height) = (width.max(1), height.max(1));
-        let mut pixels = Vec::with_capacity(3 * width as usize * height as usize);
-        for _ in 0..width as usize * height as usize {
-            pixels.extend_from_slice(&background);
-        }
+        let pixels = background.repeat(width as usize * height as usize);
         Self {
             width,
             height,
@@ -93,17 +108,11 @@ impl Canvas {
 
     /// The finished image, fully opaque.
     pub(crate) fn into_rgba(self) -> RgbaImage {
-        let mut out = Vec::with_capacity(4 * self.width as usize * self.height as usize);
-        for px in self.pixels.chunks_exact(3) {
-            out.extend_from_slice(&[px[0], px[1], px[2], 255]);
+        let mut out = vec![255u8; 4 * self.width as usize * self.height as usize];
+        for (rgba, rgb) in out.chunks_exact_mut(4).zip(self.pixels.chunks_exact(3)) {
+            rgba[..3].copy_from_slice(rgb);
         }
         RgbaImage::from_raw(self.width, self.height, out).expect("buffer matches its size")
-    }
-
-    /// Pixel (x, y), or `None` outside.
-    pub(crate) fn get(&self, x: i32, y: i32) -> Option<[u8; 3]> {
-        self.offset(x, y)
-            .map(|o| [self.pixels[o], self.pixels[o + 1], self.pixels[o + 2]])
     }
 
     fn offset(&self, x: i32, y: i32) -> Option<usize> {
@@ -122,6 +131,25 @@ impl Canvas {
     pub(crate) fn blend(&mut self, x: i32, y: i32, color: [u8; 3], alpha: f32) {
         if let Some(o) = self.offset(x, y) {
             blend_into(&mut self.pixels[o..o + 3], color, alpha);
+        }
+    }
+
+    /// Blends, at opacity `alpha`, the colour `color_of(k)` (`None` = nothing) over pixel
+    /// (x + k, y) for k in `0..len`; clipped to the canvas.
+    pub(crate) fn blend_row(
+        &mut self,
+        x: i32,
+        y: i32,
+        len: u32,
+        alpha: f32,
+        mut color_of: impl FnMut(usize) -> Option<[u8; 3]>,
+    ) {
+        let first = (-x).clamp(0, len as i32) as usize;
+        let span = self.row_span(y, x + first as i32, x + len as i32);
+        for (k, px) in span.chunks_exact_mut(3).enumerate() {
+            if let Some(color) = color_of(first + k) {
+                blend_into(px, color, alpha);
+            }
         }
     }
 
@@ -204,32 +232,76 @@ impl Canvas {
         }
     }
 
-    /// Draws `image` scaled (bilinear) into columns `x..x+w`, rows `y..y+h`.
+    /// Draws `image` scaled (bilinear) into columns `x..x+w`, rows `y..y+h`. Separable: each
+    /// source row is interpolated horizontally once, then pairs of rows vertically.
     pub(crate) fn blit_scaled(&mut self, image: &RgbImage, x: i32, y: i32, w: u32, h: u32) {
         if image.width() == 0 || image.height() == 0 || w == 0 || h == 0 {
             return;
         }
-        let xs = sample_taps(image.width(), w);
+        // Only the visible columns are computed.
+        let (c0, c1) = (
+            (-x).clamp(0, w as i32) as usize,
+            (self.width as i32 - x).clamp(0, w as i32) as usize,
+        );
+        if c1 <= c0 {
+            return;
+        }
+        let xs = &sample_taps(image.width(), w)[c0..c1];
         let ys = sample_taps(image.height(), h);
         let src = image.as_raw();
         let stride = 3 * image.width() as usize;
+        let horizontal = |row: usize, out: &mut Vec<f32>| {
+            out.clear();
+            let line = &src[row * stride..(row + 1) * stride];
+            for &(x0, x1, fx) in xs {
+                for c in 0..3 {
+                    let (a, b) = (f32::from(line[3 * x0 + c]), f32::from(line[3 * x1 + c]));
+                    out.push(a * (1.0 - fx) + b * fx);
+                }
+            }
+        };
+        let (mut top, mut bottom) = (Vec::new(), Vec::new());
+        let mut cached: (Option<usize>, Option<usize>) = (None, None);
         for (row, &(y0, y1, fy)) in ys.iter().enumerate() {
             let ty = y + row as i32;
             if ty < 0 || ty as u32 >= self.height {
                 continue;
             }
-            for (col, &(x0, x1, fx)) in xs.iter().enumerate() {
-                let tx = x + col as i32;
-                let Some(o) = self.offset(tx, ty) else {
-                    continue;
-                };
-                for c in 0..3 {
-                    let at = |yy: usize, xx: usize| f32::from(src[yy * stride + 3 * xx + c]);
-                    let top = at(y0, x0) * (1.0 - fx) + at(y0, x1) * fx;
-                    let bottom = at(y1, x0) * (1.0 - fx) + at(y1, x1) * fx;
-                    self.pixels[o + c] = (top * (1.0 - fy) + bottom * fy).round() as u8;
+            if cached.0 != Some(y0) {
+                if cached.1 == Some(y0) {
+                    std::mem::swap(&mut top, &mut bottom);
+                    cached.1 = None;
+                } else {
+                    horizontal(y0, &mut top);
                 }
+                cached.0 = Some(y0);
             }
+            if cached.1 != Some(y1) {
+                horizontal(y1, &mut bottom);
+                cached.1 = Some(y1);
+            }
+            let span = self.row_span(ty, x + c0 as i32, x + c1 as i32);
+            for ((px, t), b) in span.iter_mut().zip(&top).zip(&bottom) {
+                *px = (t * (1.0 - fy) + b * fy).round() as u8;
+            }
+        }
+    }
+
+    /// Copies `image` 1:1 with its top-left corner at (x, y), clipped.
+    pub(crate) fn blit(&mut self, image: &RgbImage, x: i32, y: i32) {
+        let stride = 3 * image.width() as usize;
+        let x0 = x.max(0);
+        let x1 = (x + image.width() as i32).min(self.width as i32);
+        if x1 <= x0 {
+            return;
+        }
+        for row in 0..image.height() as i32 {
+            let span = self.row_span(y + row, x0, x1);
+            if span.is_empty() {
+                continue;
+            }
+            let from = row as usize * stride + 3 * (x0 - x) as usize;
+            span.copy_from_slice(&image.as_raw()[from..from + span.len()]);
         }
     }
 
@@ -268,11 +340,7 @@ impl Canvas {
 
     /// Width and height of `text` at `size` pixels.
     pub(crate) fn text_size(text: &str, size: f64) -> (u32, u32) {
-        ensure_font();
-        match (FAMILY, size).into_font().layout_box(text) {
-            Ok(((x0, y0), (x1, y1))) => ((x1 - x0).max(0) as u32, (y1 - y0).max(0) as u32),
-            Err(_) => (0, 0),
-        }
+        rasterized(text, size).map_or((0, 0), |r| (r.width, r.height))
     }
 
     /// Draws `text` at `size` pixels with its `anchor` at (x, y); clipped to the canvas.
@@ -285,15 +353,13 @@ impl Canvas {
         color: [u8; 3],
         anchor: Anchor,
     ) {
-        ensure_font();
         if text.is_empty() || size < 1.0 {
             return;
         }
-        let font = (FAMILY, size).into_font();
-        let Ok(((min_x, min_y), (max_x, max_y))) = font.layout_box(text) else {
+        let Some(raster) = rasterized(text, size) else {
             return;
         };
-        let (w, h) = (max_x - min_x, max_y - min_y);
+        let (w, h) = (raster.width as i32, raster.height as i32);
         let pos = anchor.pos();
         let dx = match pos.h_pos {
             HPos::Left => 0,
@@ -305,10 +371,9 @@ impl Canvas {
             VPos::Center => -h / 2,
             VPos::Bottom => -h,
         };
-        let _ = font.draw(text, (0, 0), |px, py, alpha| {
-            self.blend(x + px + dx - min_x, y + py + dy - min_y, color, alpha);
-            Ok::<(), ()>(())
-        });
+        for &(px, py, alpha) in &raster.coverage {
+            self.blend(x + dx + px, y + dy + py, color, alpha);
+        }
     }
 
     /// Draws `text` on a translucent dark plate (for labels over images).
@@ -339,6 +404,60 @@ impl Canvas {
         ensure_font();
         BitMapBackend::with_buffer(&mut self.pixels, (self.width, self.height))
     }
+}
+
+/// A text rasterised once in the shipped font: its layout box and the coverage of every
+/// pixel it touches, relative to the box's top-left corner.
+struct RasterText {
+    width: u32,
+    height: u32,
+    coverage: Vec<(i32, i32, f32)>,
+}
+
+/// Texts rasterised at most before the cache starts afresh (views draw a few hundred).
+const RASTER_CACHE: usize = 4096;
+
+thread_local! {
+    /// Rasterised texts by size (its bits) and text: views redraw the same titles, labels
+    /// and numbers every frame, and glyph outlines are the expensive part of text.
+    static RASTERS: RefCell<HashMap<u64, HashMap<String, Rc<RasterText>>>> =
+        RefCell::new(HashMap::new());
+}
+
+/// `text` at `size` pixels, from the cache or rasterised now; `None` when the font cannot
+/// lay it out.
+fn rasterized(text: &str, size: f64) -> Option<Rc<RasterText>> {
+    let cached = RASTERS.with_borrow(|cache| {
+        cache
+            .get(&size.to_bits())
+            .and_then(|texts| texts.get(text).cloned())
+    });
+    if cached.is_some() {
+        return cached;
+    }
+    ensure_font();
+    let font = (FAMILY, size).into_font();
+    let ((min_x, min_y), (max_x, max_y)) = font.layout_box(text).ok()?;
+    let mut coverage = Vec::new();
+    let _ = font.draw(text, (0, 0), |px, py, alpha| {
+        coverage.push((px - min_x, py - min_y, alpha));
+        Ok::<(), ()>(())
+    });
+    let raster = Rc::new(RasterText {
+        width: (max_x - min_x).max(0) as u32,
+        height: (max_y - min_y).max(0) as u32,
+        coverage,
+    });
+    RASTERS.with_borrow_mut(|cache| {
+        if cache.values().map(HashMap::len).sum::<usize>() >= RASTER_CACHE {
+            cache.clear();
+        }
+        cache
+            .entry(size.to_bits())
+            .or_default()
+            .insert(text.to_string(), Rc::clone(&raster));
+    });
+    Some(raster)
 }
 
 /// Blends `color` over the RGB pixel `px` with opacity `alpha`.

@@ -1,13 +1,16 @@
 //! Evaluation charts by plotters: the ROC curve with its FPR95 point and AUROC, and the
 //! histogram of frame scores of normal vs anomalous frames with the threshold.
 
+use std::ops::Range;
+
 use image::RgbaImage;
+use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 use crate::eval::RocCurve;
 
-use super::canvas::{Anchor, Canvas, FAMILY};
-use super::frame_view::BACKGROUND;
+use super::canvas::{Anchor, Canvas, FAMILY, render_view};
 use super::legend::{LEGEND_TEXT, short_number};
 
 /// Colour of normal frames in the histogram.
@@ -53,12 +56,66 @@ fn label_style(size: f64) -> TextStyle<'static> {
         .color(&RGBColor(LEGEND_TEXT[0], LEGEND_TEXT[1], LEGEND_TEXT[2]))
 }
 
+/// The chart area both charts draw into.
+type Chart<'a, 'b> =
+    ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// The frame of a chart: title, axis ranges, descriptions and tick labels (six on x).
+struct Axes<'a> {
+    title: &'a str,
+    x: Range<f64>,
+    y: Range<f64>,
+    x_desc: &'a str,
+    y_desc: &'a str,
+    y_labels: usize,
+    /// Tick label formats (`None` = plotters' own).
+    x_format: Option<&'a dyn Fn(&f64) -> String>,
+    y_format: Option<&'a dyn Fn(&f64) -> String>,
+}
+
+/// A chart over the whole of `root` with the title, axes, grid and tick labels of `axes`
+/// drawn, ready for its content; `None` when the area is too small for one.
+fn chart_on<'a, 'b>(
+    root: &'a DrawingArea<BitMapBackend<'b>, Shift>,
+    axes: &Axes<'_>,
+) -> Option<Chart<'a, 'b>> {
+    let size = root.dim_in_pixel();
+    let f = font(size);
+    let left = (size.0 / 7).clamp(0, 56);
+    let bottom = (size.1 / 7).clamp(0, 40);
+    let mut builder = ChartBuilder::on(root);
+    builder
+        .margin(6)
+        .caption(axes.title, label_style(f + 1.0))
+        .x_label_area_size(bottom)
+        .y_label_area_size(left);
+    let mut chart = builder
+        .build_cartesian_2d(axes.x.clone(), axes.y.clone())
+        .ok()?;
+    let mut mesh = chart.configure_mesh();
+    mesh.x_labels(6)
+        .y_labels(axes.y_labels)
+        .bold_line_style(GRID)
+        .light_line_style(TRANSPARENT)
+        .axis_style(AXIS)
+        .label_style(label_style(f))
+        .axis_desc_style(label_style(f))
+        .x_desc(axes.x_desc)
+        .y_desc(axes.y_desc);
+    if let Some(format) = axes.x_format {
+        mesh.x_label_formatter(format);
+    }
+    if let Some(format) = axes.y_format {
+        mesh.y_label_formatter(format);
+    }
+    let _ = mesh.draw();
+    Some(chart)
+}
+
 /// Renders the ROC curve at `size`, with AUROC, AP and the FPR95 point (first threshold
 /// whose TPR reaches 0.95) in its title; says why when the curve is undefined.
 pub fn roc_chart(input: &ScoreLabels<'_>, size: (u32, u32)) -> RgbaImage {
-    let mut canvas = Canvas::new(size.0, size.1, BACKGROUND);
-    draw_roc(&mut canvas, input);
-    canvas.into_rgba()
+    render_view(size, |canvas, _| draw_roc(canvas, input))
 }
 
 /// Draws the ROC chart over the whole of `canvas`.
@@ -92,58 +149,43 @@ pub(crate) fn draw_roc(canvas: &mut Canvas, input: &ScoreLabels<'_>) {
         "ROC · AUROC {:.3} · AP {:.3} · FPR95 {:.3}",
         metrics.auroc, metrics.average_precision, metrics.fpr95
     );
-    let left = (size.0 / 7).clamp(0, 56);
-    let bottom = (size.1 / 7).clamp(0, 40);
-    {
-        let backend = canvas.plotters();
-        let root = backend.into_drawing_area();
-        let mut builder = ChartBuilder::on(&root);
-        builder
-            .margin(6)
-            .caption(&title, label_style(f + 1.0))
-            .x_label_area_size(bottom)
-            .y_label_area_size(left);
-        let Ok(mut chart) = builder.build_cartesian_2d(0.0f64..1.0, 0.0f64..1.0) else {
-            return;
-        };
-        let _ = chart
-            .configure_mesh()
-            .x_labels(6)
-            .y_labels(6)
-            .bold_line_style(GRID)
-            .light_line_style(TRANSPARENT)
-            .axis_style(AXIS)
-            .label_style(label_style(f))
-            .axis_desc_style(label_style(f))
-            .x_desc("false positive rate")
-            .y_desc("true positive rate")
-            .draw();
-        let _ = chart.draw_series(DashedLineSeries::new(
-            [(0.0, 0.0), (1.0, 1.0)],
-            4,
-            4,
-            AXIS.into(),
-        ));
-        let _ = chart.draw_series(LineSeries::new(points, ANOMALOUS.stroke_width(2)));
-        let _ = chart.draw_series(std::iter::once(Circle::new(
-            point95,
-            5,
-            MARK.stroke_width(2),
-        )));
-        let _ = chart.draw_series(std::iter::once(Text::new(
-            format!("TPR ≥ 0.95 at FPR {}", short_number(point95.0)),
-            (point95.0.min(0.55) + 0.03, (point95.1 - 0.1).max(0.05)),
-            label_style(f).color(&MARK),
-        )));
-    }
+    let axes = Axes {
+        title: &title,
+        x: 0.0..1.0,
+        y: 0.0..1.0,
+        x_desc: "false positive rate",
+        y_desc: "true positive rate",
+        y_labels: 6,
+        x_format: None,
+        y_format: None,
+    };
+    let root = canvas.plotters().into_drawing_area();
+    let Some(mut chart) = chart_on(&root, &axes) else {
+        return;
+    };
+    let _ = chart.draw_series(DashedLineSeries::new(
+        [(0.0, 0.0), (1.0, 1.0)],
+        4,
+        4,
+        AXIS.into(),
+    ));
+    let _ = chart.draw_series(LineSeries::new(points, ANOMALOUS.stroke_width(2)));
+    let _ = chart.draw_series(std::iter::once(Circle::new(
+        point95,
+        5,
+        MARK.stroke_width(2),
+    )));
+    let _ = chart.draw_series(std::iter::once(Text::new(
+        format!("TPR ≥ 0.95 at FPR {}", short_number(point95.0)),
+        (point95.0.min(0.55) + 0.03, (point95.1 - 0.1).max(0.05)),
+        label_style(f).color(&MARK),
+    )));
 }
 
 /// Renders the histogram of frame scores of normal vs anomalous frames at `size`, with the
 /// threshold as a vertical line.
 pub fn histogram(input: &ScoreLabels<'_>, size: (u32, u32)) -> RgbaImage {
-    let mut canvas = Canvas::new(size.0, size.1, BACKGROUND);
-    draw_histogram(&mut canvas, input);
-    canvas.into_rgba()
+    render_view(size, |canvas, _| draw_histogram(canvas, input))
 }
 
 /// Bins of the histogram.
@@ -186,33 +228,20 @@ pub(crate) fn draw_histogram(canvas: &mut Canvas, input: &ScoreLabels<'_>) {
         labels.iter().filter(|l| **l).count(),
     );
     let title = format!("frame scores · {normal} normal, {anomalous} anomalous");
-    let left = (size.0 / 7).clamp(0, 56);
-    let bottom = (size.1 / 7).clamp(0, 40);
-    let backend = canvas.plotters();
-    let root = backend.into_drawing_area();
-    let mut builder = ChartBuilder::on(&root);
-    builder
-        .margin(6)
-        .caption(&title, label_style(f + 1.0))
-        .x_label_area_size(bottom)
-        .y_label_area_size(left);
-    let Ok(mut chart) = builder.build_cartesian_2d(lo..hi, 0.0f64..f64::from(top) * 1.1) else {
+    let axes = Axes {
+        title: &title,
+        x: lo..hi,
+        y: 0.0..f64::from(top) * 1.1,
+        x_desc: "fused frame score",
+        y_desc: "frames",
+        y_labels: 5,
+        x_format: Some(&|v| short_number(*v)),
+        y_format: Some(&|v| format!("{}", v.round() as i64)),
+    };
+    let root = canvas.plotters().into_drawing_area();
+    let Some(mut chart) = chart_on(&root, &axes) else {
         return;
     };
-    let _ = chart
-        .configure_mesh()
-        .x_labels(6)
-        .y_labels(5)
-        .bold_line_style(GRID)
-        .light_line_style(TRANSPARENT)
-        .axis_style(AXIS)
-        .label_style(label_style(f))
-        .axis_desc_style(label_style(f))
-        .x_label_formatter(&|v| short_number(*v))
-        .y_label_formatter(&|v| format!("{}", v.round() as i64))
-        .x_desc("fused frame score")
-        .y_desc("frames")
-        .draw();
     for (class, color, name) in [(0usize, NORMAL, "normal"), (1, ANOMALOUS, "anomalous")] {
         let bars = counts[class]
             .iter()

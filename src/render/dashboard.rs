@@ -4,10 +4,10 @@
 
 use image::RgbaImage;
 
-use super::canvas::Canvas;
+use super::canvas::{BACKGROUND, Canvas};
 use super::charts::{ScoreLabels, draw_histogram, draw_roc};
 use super::flow_view::{FlowViewInput, FlowViewOptions, draw_flow_view};
-use super::frame_view::{BACKGROUND, FrameViewInput, FrameViewOptions, draw_frame_view};
+use super::frame_view::{FrameViewInput, FrameViewOptions, draw_frame_view};
 use super::pred_view::{PredViewInput, PredViewOptions, draw_pred_view};
 use super::timeline::{TimelineInput, TimelineOptions, draw_timeline};
 use crate::sequence::FlowField;

@@ -6,13 +6,11 @@ use image::{GrayImage, RgbImage, RgbaImage};
 
 use crate::score::{FusionWeights, Heatmap};
 
-use super::canvas::{Anchor, Canvas};
+use super::canvas::{Anchor, Canvas, render_view};
 use super::colormap::Colormap;
 use super::legend::{LEGEND_TEXT, colour_bar, short_number};
 use super::overlay::{Placement, SceneObject, ScoreScale, draw_boxes, draw_mask_contour};
 
-/// Background of every view.
-pub(crate) const BACKGROUND: [u8; 3] = [24, 26, 30];
 /// Colour of the ground-truth anomaly contour.
 pub const MASK_COLOR: [u8; 3] = [255, 64, 255];
 
@@ -165,10 +163,9 @@ pub fn frame_view(
     options: &FrameViewOptions,
     size: (u32, u32),
 ) -> RgbaImage {
-    let mut canvas = Canvas::new(size.0, size.1, BACKGROUND);
-    let (w, h) = (canvas.width(), canvas.height());
-    draw_frame_view(&mut canvas, input, options, (0, 0, w, h));
-    canvas.into_rgba()
+    render_view(size, |canvas, rect| {
+        draw_frame_view(canvas, input, options, rect)
+    })
 }
 
 /// The size at which a frame of `frame` (width, height) is drawn 1:1 with a caption strip
@@ -345,14 +342,10 @@ fn draw_heatmap(
         let hy = (((cy as f32 + 0.5) / place.h as f32 * heat.height as f32) as usize)
             .min(heat.height as usize - 1);
         let row = &heat.values[hy * heat.width as usize..(hy + 1) * heat.width as usize];
-        for (cx, &hx) in columns.iter().enumerate() {
-            let v = row[hx];
-            if !(v.is_finite() && v >= floor && v > low) {
-                continue;
-            }
-            let t = ((v - low) / span).clamp(0.0, 1.0);
-            let color = lut[(t * 255.0).round() as usize];
-            canvas.blend(place.x + cx as i32, place.y + cy as i32, color, opacity);
-        }
+        canvas.blend_row(place.x, place.y + cy as i32, place.w, opacity, |cx| {
+            let v = row[columns[cx]];
+            (v.is_finite() && v >= floor && v > low)
+                .then(|| lut[(((v - low) / span).clamp(0.0, 1.0) * 255.0).round() as usize])
+        });
     }
 }

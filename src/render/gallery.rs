@@ -4,6 +4,8 @@
 
 use image::RgbImage;
 
+use crate::score::ObjectMaps;
+
 use super::canvas::{Anchor, Canvas};
 use super::colormap::Colormap;
 use super::legend::{LEGEND_TEXT, colour_bar};
@@ -23,22 +25,31 @@ const MAX_TILE: u32 = 192;
 /// Objects shown at most, the highest-scoring first.
 pub(crate) const GALLERY_OBJECTS: usize = 6;
 
-/// Draws a per-object gallery into the rectangle (x, y, w, h) with, when there is room and
-/// something to show, a colour bar of the error tiles' `range` at its right edge titled
-/// `bar_title`. Shared by the prediction and flow views, whose galleries differ only in
-/// their tiles and titles.
-#[allow(clippy::too_many_arguments)]
+/// A per-object gallery whose last tile of each object is an error map: the items, the
+/// tile titles and the colour bar of the error tiles.
+pub(crate) struct ErrorGallery<'a> {
+    /// The objects' tiles, chosen by [`gallery_items`].
+    pub items: Vec<GalleryItem>,
+    /// How many objects have maps (the items may be fewer).
+    pub total: usize,
+    /// Titles of the tile columns.
+    pub titles: &'a [&'a str],
+    /// Colormap of the error tiles.
+    pub colormap: Colormap,
+    /// Value range of the error tiles.
+    pub range: (f32, f32),
+    /// Title of the colour bar.
+    pub bar_title: &'a str,
+}
+
+/// Draws `gallery` into the rectangle (x, y, w, h) with, when there is room and something
+/// to show, the colour bar of its error tiles at the right edge.
 pub(crate) fn draw_error_gallery(
     canvas: &mut Canvas,
     (x, y, w, h): (i32, i32, u32, u32),
-    items: &[GalleryItem],
-    total: usize,
-    titles: &[&str],
-    colormap: Colormap,
-    range: (f32, f32),
-    bar_title: &str,
+    gallery: &ErrorGallery<'_>,
 ) {
-    let bar_w = if w >= 200 && !items.is_empty() {
+    let bar_w = if w >= 200 && !gallery.items.is_empty() {
         (w / 14).clamp(44, 80)
     } else {
         0
@@ -46,9 +57,9 @@ pub(crate) fn draw_error_gallery(
     draw_gallery(
         canvas,
         (x, y, w.saturating_sub(bar_w), h),
-        items,
-        total,
-        titles,
+        &gallery.items,
+        gallery.total,
+        gallery.titles,
         "no scored object in this frame",
     );
     if bar_w > 0 {
@@ -58,16 +69,16 @@ pub(crate) fn draw_error_gallery(
             y,
             bar_w,
             h,
-            colormap,
-            (f64::from(range.0), f64::from(range.1)),
-            bar_title,
+            gallery.colormap,
+            (f64::from(gallery.range.0), f64::from(gallery.range.1)),
+            gallery.bar_title,
         );
     }
 }
 
-/// Draws `items` (chosen by [`gallery_order`] from `total` objects) into the rectangle
+/// Draws `items` (chosen by [`gallery_items`] from `total` objects) into the rectangle
 /// (x, y, w, h), tile columns titled `titles`; says so when there is no object.
-pub(crate) fn draw_gallery(
+fn draw_gallery(
     canvas: &mut Canvas,
     (x, y, w, h): (i32, i32, u32, u32),
     items: &[GalleryItem],
@@ -131,9 +142,13 @@ pub(crate) fn draw_gallery(
     }
 }
 
-/// Indices of the objects with maps, highest score first, at most [`GALLERY_OBJECTS`];
-/// and how many objects have maps.
-pub(crate) fn gallery_order(objects: &[SceneObject<'_>]) -> (Vec<usize>, usize) {
+/// The gallery items of the highest-scoring objects with maps (at most
+/// [`GALLERY_OBJECTS`]), each with the tiles `tiles` makes from the object's index, the
+/// object and its maps (`None` leaves the object out); and how many objects have maps.
+pub(crate) fn gallery_items(
+    objects: &[SceneObject<'_>],
+    mut tiles: impl FnMut(usize, &SceneObject<'_>, &ObjectMaps) -> Option<Vec<RgbImage>>,
+) -> (Vec<GalleryItem>, usize) {
     let mut order: Vec<usize> = (0..objects.len())
         .filter(|&k| objects[k].maps.is_some())
         .collect();
@@ -143,5 +158,23 @@ pub(crate) fn gallery_order(objects: &[SceneObject<'_>]) -> (Vec<usize>, usize) 
         key(b).total_cmp(&key(a))
     });
     order.truncate(GALLERY_OBJECTS);
-    (order, total)
+    let items = order
+        .into_iter()
+        .filter_map(|k| {
+            let object = &objects[k];
+            Some(GalleryItem {
+                label: object_label(object),
+                tiles: tiles(k, object, object.maps?)?,
+            })
+        })
+        .collect();
+    (items, total)
+}
+
+/// "#track score" of a gallery entry.
+fn object_label(object: &SceneObject<'_>) -> String {
+    match object.score {
+        Some(s) => format!("#{} {s:.1}", object.track_id),
+        None => format!("#{}", object.track_id),
+    }
 }

@@ -19,6 +19,7 @@
 mod canvas;
 pub mod charts;
 pub mod colormap;
+mod comparison;
 pub mod dashboard;
 mod error;
 pub mod export;

@@ -10,8 +10,7 @@ use std::ops::Range;
 use image::RgbaImage;
 use plotters::prelude::*;
 
-use super::canvas::{Anchor, Canvas, FAMILY};
-use super::frame_view::BACKGROUND;
+use super::canvas::{Anchor, Canvas, FAMILY, render_view};
 use super::legend::{LEGEND_TEXT, short_number};
 
 /// The series of one timeline, one value per frame index; slices may be empty (not drawn).
@@ -442,9 +441,7 @@ pub fn timeline(
     options: &TimelineOptions,
     size: (u32, u32),
 ) -> RgbaImage {
-    let mut canvas = Canvas::new(size.0, size.1, BACKGROUND);
-    draw_timeline(&mut canvas, input, options);
-    canvas.into_rgba()
+    render_view(size, |canvas, _| draw_timeline(canvas, input, options))
 }
 
 /// Draws the timeline over the whole of `canvas`.

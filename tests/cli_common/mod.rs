@@ -6,10 +6,12 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-/// Runs the `vadscope` binary built for these tests with `args`.
+/// Runs the `vadscope` binary built for these tests with `args` (a `$VADSCOPE_MODEL` of the
+/// environment is removed, so the default model is always the bundled one).
 pub fn vadscope(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_vadscope"))
         .args(args)
+        .env_remove("VADSCOPE_MODEL")
         .output()
         .expect("the vadscope binary runs")
 }

@@ -55,6 +55,21 @@ impl Placed {
         self.rect.min.x + self.layout.x_of(frame) / self.ppp
     }
 
+    /// Width of one frame's column, in points.
+    fn frame_width(&self) -> f32 {
+        (self.x_of(1) - self.x_of(0)).abs()
+    }
+
+    /// Where an interval edge at `frame` lies: a start edge on the left side of its first
+    /// frame's column, an end edge on the right side of its last frame's.
+    fn edge_x(&self, edge: Edge, frame: usize) -> f32 {
+        let half = self.frame_width() / 2.0;
+        match edge {
+            Edge::Start => self.x_of(frame) - half,
+            Edge::End => self.x_of(frame) + half,
+        }
+    }
+
     fn y_of_row(&self, row: f32) -> f32 {
         self.rect.min.y + row / self.ppp
     }
@@ -196,13 +211,9 @@ impl TimelinePanel {
         let labels = state.current_labels()?.labels();
         let frame = placed.frame_at(pos)?;
         let edge = labels.nearest_edge(frame)?;
-        // An interval's end edge lies at the right side of its last frame's column.
-        let half = (placed.x_of(1) - placed.x_of(0)).abs() / 2.0;
-        let x = match edge.edge {
-            Edge::Start => placed.x_of(edge.frame) - half,
-            Edge::End => placed.x_of(edge.frame) + half,
-        };
-        ((pos.x - x).abs() <= GRAB_DISTANCE.max(half)).then_some(edge)
+        let half = placed.frame_width() / 2.0;
+        ((pos.x - placed.edge_x(edge.edge, edge.frame)).abs() <= GRAB_DISTANCE.max(half))
+            .then_some(edge)
     }
 
     fn near_threshold(state: &AppState, placed: &Placed, pos: Pos2) -> bool {
@@ -261,7 +272,7 @@ impl TimelinePanel {
             _ => {}
         }
         if let Some(Drag::Edge(edge, frame)) = self.drag {
-            let x = placed.x_of(frame);
+            let x = placed.edge_x(edge.edge, frame);
             let rows = placed.rows(&(layout.score_y.start..layout.labels_y.end));
             ui.painter().vline(x, rows, Stroke::new(2.0, GRAB_COLOR));
             response.clone().on_hover_ui_at_pointer(|ui| {
@@ -304,8 +315,8 @@ impl TimelinePanel {
             if let Some(edge) = Self::edge_under(state, placed, pos) {
                 ui.ctx().set_cursor_icon(CursorIcon::ResizeHorizontal);
                 let rows = placed.rows(&layout.labels_y);
-                ui.painter()
-                    .vline(placed.x_of(edge.frame), rows, Stroke::new(3.0, GRAB_COLOR));
+                let x = placed.edge_x(edge.edge, edge.frame);
+                ui.painter().vline(x, rows, Stroke::new(3.0, GRAB_COLOR));
             } else if Self::near_threshold(state, placed, pos) {
                 ui.ctx().set_cursor_icon(CursorIcon::ResizeVertical);
                 let y = placed.threshold_y(state.threshold());

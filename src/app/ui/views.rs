@@ -187,7 +187,7 @@ pub fn main_image(state: &AppState, size: (u32, u32)) -> Result<Option<ViewImage
             };
             let frame = scene.frame.dimensions();
             // render leaves the colour bar out when there is no heatmap (unscored).
-            let mut fit = options.frame.clone();
+            let mut fit = options.frame;
             fit.heatmap &= scene.heatmap.is_some();
             let (scale, view) = fit_frame_view(frame, &fit, size);
             let scaled_h = (frame.1 as f32 * scale).round();
