@@ -132,7 +132,7 @@ impl TimelinePanel {
         if self.window.as_ref().is_some_and(|w| w.end > frames) {
             self.window = None;
         }
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             ui.strong("Timeline");
             let shown = self.window.clone().unwrap_or(0..frames);
             ui.weak(format!(

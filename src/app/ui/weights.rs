@@ -120,7 +120,7 @@ impl WeightsPanel {
         let key = RocKey {
             scenario: state.current_scenario(),
             labels: state.current_labels().map(|l| l.editor().seq()),
-            settings: settings.clone(),
+            settings: state.settings().clone(),
             threshold: state.threshold().to_bits(),
             scored: state.dataset_metrics().scenarios,
         };
