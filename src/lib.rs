@@ -7,6 +7,7 @@
 pub mod annotate;
 pub mod app;
 pub mod eval;
+pub mod export;
 pub mod flow;
 pub mod model;
 pub mod render;

@@ -1,28 +1,22 @@
 //! The viewer's egui layer driven headlessly with egui_kittest: a small generated data set
 //! scored by a tiny model, frames stepped with keys, a weight slider moved (the metrics text
-//! changes), a failure case clicked (the timeline jumps there), overlays and views toggled,
-//! the help overlay, and a malformed scenario shown as an error instead of a crash.
+//! changes), the threshold line dragged on the timeline, a failure case clicked (the
+//! timeline jumps there), overlays and views toggled, the help overlay, the export dialog
+//! writing PNG, GIF and `scores.csv`, and a malformed scenario shown as an error instead of
+//! a crash.
 
 mod app_common;
 
-use app_common::{generate_dataset, scored_state};
+use app_common::{drag, viewer_harness};
+use egui::accesskit::Role;
 use egui::{Key, Modifiers};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use vadscope::app::{Layout, ThresholdMode, ViewMode, ViewerApp};
+use vadscope::app::{ThresholdMode, ViewMode, ViewerApp};
+use vadscope::render::SCORES_HEADER;
 
-/// The viewer over a scored generated data set, drawn at 1400×900.
 fn harness(dir: &std::path::Path) -> Harness<'static, ViewerApp> {
-    let root = generate_dataset(dir);
-    let model = app_common::tiny_checkpoint(dir);
-    let state = scored_state(&root, &model);
-    let app = ViewerApp::with_state(state, Layout::default());
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1400.0, 900.0))
-        .wgpu()
-        .build_ui_state(|ui, app: &mut ViewerApp| app.show(ui), app);
-    harness.run();
-    harness
+    viewer_harness(dir)
 }
 
 #[test]
@@ -190,4 +184,80 @@ fn a_malformed_scenario_is_an_error_in_the_log_not_a_crash() {
     }
     let errors = h.query_all_by_label_contains("RGB_IMG_0.png").count();
     assert!(errors > 0, "the bad file is named in the log");
+}
+
+#[test]
+fn dragging_the_threshold_line_moves_the_threshold() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut h = harness(dir.path());
+    let before = h.state().state().threshold();
+    let on_line = h
+        .state()
+        .timeline_score_point(6, before)
+        .expect("timeline drawn");
+    h.hover_at(on_line);
+    h.run();
+    assert_eq!(
+        h.output().platform_output.cursor_icon,
+        egui::CursorIcon::ResizeVertical,
+        "the threshold line shows it can be dragged"
+    );
+    let frame_before = h.state().state().frame();
+    drag(&mut h, on_line, on_line + egui::vec2(0.0, -25.0));
+    let state = h.state().state();
+    assert_eq!(state.settings().threshold_mode, ThresholdMode::Manual);
+    let after = state.threshold();
+    assert!(after > before, "dragged up: {before} -> {after}");
+    assert_eq!(
+        state.frame(),
+        frame_before,
+        "a threshold drag does not seek"
+    );
+    h.get_by_label(&format!("threshold {after:.3}"));
+}
+
+#[test]
+fn the_export_dialog_writes_png_gif_and_scores_csv() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut h = harness(dir.path());
+    h.key_press_modifiers(Modifiers::COMMAND, Key::E);
+    h.run();
+    h.get_by_label("all frames").click();
+    h.run();
+    h.get_by_label("animated GIF").click();
+    h.run();
+    let out = dir.path().join("exported");
+    let field = h.get_by_role_and_label(Role::TextInput, "export folder");
+    field.focus();
+    h.run();
+    h.get_by_role_and_label(Role::TextInput, "export folder")
+        .type_text(&out.display().to_string());
+    h.run();
+    h.get_by_label("Export").click();
+    h.run_steps(2);
+    h.state_mut().state_mut().wait_for_export();
+    h.run();
+    let frames = h.state().state().entry().expect("entry").frames;
+    for index in 0..frames {
+        assert!(
+            out.join(format!("frame_{index:05}.png")).is_file(),
+            "frame {index} written"
+        );
+    }
+    let gif = std::fs::read(out.join("frame.gif")).expect("the GIF");
+    assert!(gif.starts_with(b"GIF89a"));
+    let csv = std::fs::read_to_string(out.join("scores.csv")).expect("scores.csv");
+    assert!(csv.contains(SCORES_HEADER));
+    assert_eq!(
+        csv.lines().filter(|l| !l.starts_with('#')).count(),
+        frames + 1,
+        "a header and one row per frame"
+    );
+    assert!(
+        h.state()
+            .state()
+            .log_entries()
+            .iter()
+            .any(|e| e.message.contains(&format!("{} files written", frames + 2)))
+    );
 }

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use crate::annotate::AnnotateError;
 use crate::model::ModelError;
 use crate::score::ScoreError;
 use crate::sequence::SequenceError;
@@ -36,6 +37,15 @@ pub enum AppError {
         /// What is wrong, in words.
         problem: String,
     },
+    /// The analyst's labels could not be opened, edited or saved.
+    #[error(transparent)]
+    Labels(#[from] AnnotateError),
+    /// A labeling request does not fit the labels (nothing was changed).
+    #[error("{0}")]
+    Labeling(String),
+    /// An export could not be written.
+    #[error("{0}")]
+    Export(String),
     /// A view could not be gathered for drawing (frame, maps or flow unreadable).
     #[error("{0}")]
     View(String),

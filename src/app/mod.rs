@@ -3,19 +3,24 @@
 //! The core ([`AppState`]) holds the open data set ([`Dataset`]), the current scenario and
 //! frame ([`Playback`]), the analyst's settings ([`ViewSettings`]), fused scores and live
 //! metrics ([`ScenarioAnalysis`], [`DatasetMetrics`]), ranked failure cases with tags
-//! ([`FailureCase`]), the background scoring job ([`ScoringJob`]) and the log. It is driven
-//! by [`Action`]s and setting changes and is tested without a display.
+//! ([`FailureCase`]), the background scoring job ([`ScoringJob`]), the labeling mode
+//! ([`Labeling`]: the analyst's labels of each scenario through `annotate`, optionally the
+//! reference of the metrics), the export job ([`ExportJob`]) and the log. It is driven by
+//! [`Action`]s and setting changes and is tested without a display.
 //!
 //! [`ui`] draws panels over it (scenario browser, main view, timeline, weights and
-//! metrics, failure cases, object inspector, log, help) and turns keys and clicks into
-//! actions; the views themselves are images drawn by `render`. [`Layout`] keeps panel
-//! sizes, settings and recent data sets between runs. [`run`] opens the window.
+//! metrics, failure cases, object inspector, labeling bar and box editor, export dialog,
+//! log, help) and turns keys, clicks and drags into actions; the views themselves are
+//! images drawn by `render`. [`Layout`] keeps panel sizes, settings and recent data sets
+//! between runs. [`run`] opens the window.
 
 pub mod analysis;
 pub mod dataset;
 pub mod error;
+pub mod export_job;
 pub mod failures;
 pub mod jobs;
+pub mod labeling;
 pub mod layout;
 pub mod playback;
 pub mod settings;
@@ -27,11 +32,13 @@ use std::path::PathBuf;
 pub use analysis::{DatasetMetrics, FusionParams, ScenarioAnalysis};
 pub use dataset::{Dataset, ScenarioEntry, ScoreStatus, Scores};
 pub use error::AppError;
+pub use export_job::{ExportChoice, ExportJob};
 pub use failures::{FailureCase, FailureKind, FailureTags, TagKey};
 pub use jobs::{JobEvent, ScoringJob, ScoringSetup};
+pub use labeling::{Labeling, ScenarioLabels};
 pub use layout::Layout;
 pub use playback::Playback;
-pub use settings::{Overlay, Overlays, ThresholdMode, ViewMode, ViewSettings};
+pub use settings::{Overlay, Overlays, Reference, ThresholdMode, ViewMode, ViewSettings};
 pub use state::{Action, AppState, FrameInfo, LogEntry, LogLevel, ObjectInfo};
 pub use ui::ViewerApp;
 

@@ -1,5 +1,6 @@
-//! What the analyst has chosen: fusion weights, median filter, threshold, which view and
-//! overlays are shown, heatmap opacity. Plain data, saved with the layout between runs.
+//! What the analyst has chosen: fusion weights, median filter, threshold, the reference
+//! of the metrics, which view and overlays are shown, heatmap opacity. Plain data, saved
+//! with the layout between runs.
 
 use serde::{Deserialize, Serialize};
 
@@ -137,6 +138,31 @@ impl ThresholdMode {
     }
 }
 
+/// The per-frame anomaly flags the metrics, failure cases and events are measured against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Reference {
+    /// The scenario's ground truth (`frame_labels.csv` and the like).
+    #[default]
+    GroundTruth,
+    /// The analyst's anomaly intervals (labeling mode; ground truth where a scenario's
+    /// labels cannot be opened).
+    AnalystLabels,
+}
+
+impl Reference {
+    /// Both, in the panel's order.
+    pub const ALL: [Self; 2] = [Self::GroundTruth, Self::AnalystLabels];
+
+    /// A name for the panel.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::GroundTruth => "ground truth",
+            Self::AnalystLabels => "analyst labels",
+        }
+    }
+}
+
 /// Detections more than this many frames after the onset count as late (0.5 s at 10 Hz).
 pub const DEFAULT_LATE_AFTER: usize = 5;
 
@@ -154,6 +180,8 @@ pub struct ViewSettings {
     pub manual_threshold: f64,
     /// Frames after an onset beyond which a detection is late.
     pub late_after: usize,
+    /// What the metrics are measured against.
+    pub reference: Reference,
     /// What the main view shows.
     pub view: ViewMode,
     /// Overlays of the frame view.
@@ -173,6 +201,7 @@ impl Default for ViewSettings {
             threshold_mode: ThresholdMode::default(),
             manual_threshold: 0.0,
             late_after: DEFAULT_LATE_AFTER,
+            reference: Reference::default(),
             view: ViewMode::default(),
             overlays: Overlays::default(),
             opacity: 0.6,

@@ -6,21 +6,25 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::annotate::{Edge, IntervalId, Rect, TrackId};
 use crate::eval::anomaly_events;
-use crate::render::reference_threshold;
+use crate::export::ExportProgress;
+use crate::render::{DashboardOptions, ViewSettings as RenderSettings, reference_threshold};
 use crate::score::{ObjectMaps, ScoreProgress};
 use crate::sequence::FrameId;
 
 use super::analysis::{DatasetMetrics, FusionParams, ScenarioAnalysis};
 use super::dataset::{Dataset, ScoreStatus, Scores};
 use super::error::AppError;
+use super::export_job::{ExportChoice, ExportEvent, ExportJob, ExportRequest};
 use super::failures::{
     FailureCase, FailureRow, FailureTags, TAGS_FILE, failures_csv, rank, scenario_failures,
     write_atomically,
 };
 use super::jobs::{JobEvent, ScoringJob, ScoringSetup};
+use super::labeling::{Labeling, ScenarioLabels};
 use super::playback::Playback;
-use super::settings::{Overlay, ThresholdMode, ViewMode, ViewSettings};
+use super::settings::{Overlay, Reference, ThresholdMode, ViewMode, ViewSettings};
 
 /// Something the analyst asks for (by key, click or button).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -55,8 +59,47 @@ pub enum Action {
     SelectObject(Option<u64>),
     /// Stop the scoring job.
     CancelScoring,
+    /// Stop the export job.
+    CancelExport,
     /// Show or hide the help overlay.
     ToggleHelp,
+    /// Turn the labeling mode on or off (opens the current scenario's labels).
+    ToggleLabeling,
+    /// Labeling: mark the cursor as the start of a new interval.
+    StartInterval,
+    /// Labeling: end the marked interval at the cursor (adds it).
+    EndInterval,
+    /// Labeling: move the interval edge nearest to the cursor to the cursor.
+    MoveNearestEdge,
+    /// Labeling: tag the current range (mark to cursor, else the selected failure run in
+    /// this scenario, else the cursor's frame) with the tag text.
+    TagRange,
+    /// Labeling: undo the last edit.
+    Undo,
+    /// Labeling: redo the last undone edit.
+    Redo,
+    /// Labeling: move an interval's edge to a frame (timeline drag).
+    SetIntervalEdge {
+        /// The interval.
+        interval: IntervalId,
+        /// Which edge.
+        edge: Edge,
+        /// Where to.
+        frame: usize,
+    },
+    /// Labeling: add a box at the cursor's frame (drawn on the frame, frame pixels).
+    AddBox(Rect),
+    /// Labeling: move or resize a box at the cursor's frame (a keyframe there).
+    SetBox {
+        /// The box's track.
+        track: TrackId,
+        /// Its new rectangle.
+        rect: Rect,
+    },
+    /// Labeling: select a box (or none).
+    SelectBox(Option<TrackId>),
+    /// Labeling: delete the selected box from the cursor's frame on.
+    DeleteSelectedBox,
 }
 
 /// How serious a log entry is.
@@ -138,6 +181,9 @@ pub struct AppState {
     job: Option<ScoringJob>,
     setup: ScoringSetup,
     show_help: bool,
+    labeling: Labeling,
+    export: Option<ExportJob>,
+    export_progress: Option<ExportProgress>,
 }
 
 impl AppState {
@@ -159,6 +205,9 @@ impl AppState {
             job: None,
             setup,
             show_help: false,
+            labeling: Labeling::new(0),
+            export: None,
+            export_progress: None,
         }
     }
 
@@ -217,8 +266,14 @@ impl AppState {
                 })
             })
             .collect();
+        let active = self.labeling.active;
+        self.labeling = Labeling::new(dataset.len());
+        self.labeling.active = active;
         self.dataset = Some(dataset);
         self.failure_cursor = None;
+        if self.settings.reference == Reference::AnalystLabels {
+            self.open_all_labels();
+        }
         self.select_scenario(0);
         self.refuse();
     }
@@ -253,8 +308,40 @@ impl AppState {
         self.job = Some(ScoringJob::start(self.setup.clone(), todo));
     }
 
-    /// Takes in what the scoring job has reported; returns whether anything changed.
+    /// Takes in what the scoring and export jobs have reported; returns whether anything
+    /// changed.
     pub fn poll_jobs(&mut self) -> bool {
+        let exported = self.poll_export();
+        exported | self.poll_scoring()
+    }
+
+    fn poll_export(&mut self) -> bool {
+        let Some(job) = &mut self.export else {
+            return false;
+        };
+        let events = job.poll();
+        let out = job.out().display().to_string();
+        let changed = !events.is_empty();
+        for event in events {
+            match event {
+                ExportEvent::Progress(p) => self.export_progress = Some(p),
+                ExportEvent::Finished(result) => {
+                    self.export = None;
+                    self.export_progress = None;
+                    match result {
+                        Ok(files) => self.log(
+                            LogLevel::Info,
+                            format!("export: {} files written to {out}", files.len()),
+                        ),
+                        Err(e) => self.log(LogLevel::Error, format!("export to {out}: {e}")),
+                    }
+                }
+            }
+        }
+        changed
+    }
+
+    fn poll_scoring(&mut self) -> bool {
         let Some(job) = &mut self.job else {
             return false;
         };
@@ -401,6 +488,96 @@ impl AppState {
         }
     }
 
+    /// Starts exporting `choice` from the current scenario in the background (as the
+    /// viewer shows it: weights, threshold, overlays, reference labels); returns whether it
+    /// started. Needs the scenario's score cache; one export runs at a time.
+    pub fn start_export(&mut self, choice: ExportChoice) -> bool {
+        if self.export.is_some() {
+            self.log(LogLevel::Warning, "an export is running already");
+            return false;
+        }
+        let Some(entry) = self.entry() else {
+            return false;
+        };
+        let Some(cache) = entry.scores().and_then(|s| s.cache()) else {
+            let message = format!("{}: nothing to export before it is scored", entry.name);
+            self.log(LogLevel::Warning, message);
+            return false;
+        };
+        if choice.out.as_os_str().is_empty() {
+            self.log(LogLevel::Warning, "export: choose a folder first");
+            return false;
+        }
+        let request = ExportRequest {
+            scenario: entry.root.clone(),
+            key: cache.table().meta.key.clone(),
+            model: self.setup.model.clone(),
+            labels: self.reference_labels().to_vec(),
+            settings: self.render_settings(),
+            options: self.dashboard_options(),
+            flow: self.setup.request.flow,
+            choice,
+        };
+        self.log(
+            LogLevel::Info,
+            format!("exporting to {}", request.choice.out.display()),
+        );
+        self.export = Some(ExportJob::start(request));
+        self.export_progress = None;
+        true
+    }
+
+    /// Whether an export runs.
+    pub fn is_exporting(&self) -> bool {
+        self.export.is_some()
+    }
+
+    /// How far the running export has come (`None` before its first frame).
+    pub fn export_progress(&self) -> Option<ExportProgress> {
+        self.export_progress
+    }
+
+    /// Waits (blocking) until the export has finished and takes in its result; for tests,
+    /// never called by the GUI.
+    pub fn wait_for_export(&mut self) {
+        while self.export.is_some() {
+            if !self.poll_export() {
+                std::thread::sleep(std::time::Duration::from_millis(5));
+            }
+        }
+    }
+
+    /// The settings `render` draws with: the analyst's weights, filter and colormap and the
+    /// threshold in effect.
+    pub fn render_settings(&self) -> RenderSettings {
+        let settings = &self.settings;
+        RenderSettings {
+            weights: settings.weights,
+            threshold: self.threshold,
+            colormap: settings.colormap,
+            auto_range: false,
+            median_kernel: settings.median_kernel,
+        }
+    }
+
+    /// The view options `vadscope render` would use for these settings (ranges from the
+    /// model's training statistics when scored), with the analyst's overlays and opacity;
+    /// while labeling, the analyst's boxes replace the scored ones (drawn by the UI).
+    pub fn dashboard_options(&self) -> DashboardOptions {
+        let settings = &self.settings;
+        let mut options = match self.entry().and_then(|e| e.scores()) {
+            Some(scores) => self.render_settings().options(scores.table()),
+            None => DashboardOptions::default(),
+        };
+        let o = &settings.overlays;
+        options.frame.heatmap = o.heatmap;
+        options.frame.boxes = o.boxes && !self.labeling.active;
+        options.frame.mask = o.mask;
+        options.frame.caption = o.caption;
+        options.frame.opacity = settings.opacity;
+        options
+    }
+
     /// Applies an action.
     pub fn apply(&mut self, action: Action) {
         match action {
@@ -410,7 +587,7 @@ impl AppState {
             Action::Last => self.playback.seek(usize::MAX),
             Action::PreviousEvent | Action::NextEvent => {
                 let frame = self.playback.frame();
-                let events = anomaly_events(self.labels());
+                let events = anomaly_events(self.reference_labels());
                 let target = if action == Action::NextEvent {
                     events.iter().find(|e| e.start > frame).map(|e| e.start)
                 } else {
@@ -447,14 +624,134 @@ impl AppState {
                     self.jump_to_failure(next as usize);
                 }
             }
-            Action::SelectObject(track) => self.selected_track = track,
+            Action::SelectObject(track) => {
+                self.selected_track = track;
+                if track.is_none() {
+                    self.labeling.selected_box = None;
+                }
+            }
             Action::CancelScoring => {
                 if let Some(job) = &self.job {
                     job.cancel();
                 }
             }
+            Action::CancelExport => {
+                if let Some(job) = &self.export {
+                    job.cancel();
+                }
+            }
             Action::ToggleHelp => self.show_help = !self.show_help,
+            Action::ToggleLabeling => {
+                self.labeling.active = !self.labeling.active;
+                if self.labeling.active {
+                    self.open_labels(self.current);
+                }
+            }
+            Action::StartInterval
+            | Action::EndInterval
+            | Action::MoveNearestEdge
+            | Action::TagRange
+            | Action::Undo
+            | Action::Redo
+            | Action::SetIntervalEdge { .. }
+            | Action::AddBox(_)
+            | Action::SetBox { .. }
+            | Action::SelectBox(_)
+            | Action::DeleteSelectedBox => self.label(action),
         }
+    }
+
+    /// Opens the labels of scenario `index` unless open, logging what opening found wrong
+    /// (damaged files are named and copied aside); returns whether they are open.
+    fn open_labels(&mut self, index: usize) -> bool {
+        if self.labeling.is_open(index) {
+            return true;
+        }
+        let Some(entry) = self.dataset.as_ref().and_then(|d| d.scenarios.get(index)) else {
+            return false;
+        };
+        let Some(scenario) = &entry.scenario else {
+            let message = format!("{}: no scenario on disk, nothing to label", entry.name);
+            self.log(LogLevel::Warning, message);
+            return false;
+        };
+        let name = entry.name.clone();
+        match ScenarioLabels::open(scenario) {
+            Ok((labels, report)) => {
+                for problem in report.problems {
+                    self.log(LogLevel::Error, format!("labels of {name}: {problem}"));
+                }
+                for copy in report.set_aside {
+                    self.log(
+                        LogLevel::Warning,
+                        format!("the damaged label file was kept as {}", copy.display()),
+                    );
+                }
+                let dir = labels
+                    .editor()
+                    .dir()
+                    .map_or_else(String::new, |d| d.display().to_string());
+                self.log(LogLevel::Info, format!("labels of {name} open ({dir})"));
+                self.labeling.insert(index, labels);
+                true
+            }
+            Err(e) => {
+                self.log(LogLevel::Error, format!("labels of {name} not opened: {e}"));
+                false
+            }
+        }
+    }
+
+    /// Opens every scenario's labels (for the analyst-labels reference).
+    fn open_all_labels(&mut self) {
+        let len = self.dataset.as_ref().map_or(0, Dataset::len);
+        for index in 0..len {
+            let on_disk = self
+                .dataset
+                .as_ref()
+                .is_some_and(|d| d.scenarios[index].scenario.is_some());
+            if on_disk {
+                self.open_labels(index);
+            }
+        }
+    }
+
+    /// Carries out a labeling action on the current scenario; what fails is logged.
+    fn label(&mut self, action: Action) {
+        if !self.labeling.active {
+            self.log(
+                LogLevel::Warning,
+                "labeling is off: press L (or View > Labeling mode) first",
+            );
+            return;
+        }
+        if !self.open_labels(self.current) {
+            return;
+        }
+        let frame = self.frame();
+        let range = self.tag_range();
+        let (result, changed) = self.labeling.perform(self.current, action, frame, range);
+        match result {
+            Ok(Some(message)) => self.log(LogLevel::Info, message),
+            Ok(None) => {}
+            Err(e) => self.log(LogLevel::Warning, format!("labeling: {e}")),
+        }
+        if changed && self.settings.reference == Reference::AnalystLabels {
+            self.refuse();
+        }
+    }
+
+    /// The frames "tag range" tags: mark to cursor, else the selected failure run when it
+    /// is in this scenario, else the cursor's frame.
+    fn tag_range(&self) -> (usize, usize) {
+        let frame = self.frame();
+        if let Some(mark) = self.labeling.mark {
+            return (mark.min(frame), mark.max(frame));
+        }
+        self.failure_cursor
+            .and_then(|c| self.failures.get(c))
+            .filter(|c| c.scenario == self.current)
+            .map_or((frame, frame), |c| (c.start, c.end))
     }
 
     fn jump_to_failure(&mut self, index: usize) {
@@ -483,6 +780,11 @@ impl AppState {
         if !keep_frame {
             self.playback = Playback::new(frames, fps);
             self.selected_track = None;
+            self.labeling.mark = None;
+            self.labeling.selected_box = None;
+        }
+        if self.labeling.active {
+            self.open_labels(index);
         }
     }
 
@@ -492,8 +794,14 @@ impl AppState {
             || settings.median_kernel != self.settings.median_kernel
             || settings.threshold_mode != self.settings.threshold_mode
             || settings.manual_threshold != self.settings.manual_threshold
-            || settings.late_after != self.settings.late_after;
+            || settings.late_after != self.settings.late_after
+            || settings.reference != self.settings.reference;
+        let analyst = settings.reference == Reference::AnalystLabels
+            && self.settings.reference != Reference::AnalystLabels;
         self.settings = settings;
+        if analyst {
+            self.open_all_labels();
+        }
         if refuse {
             self.refuse();
         }
@@ -511,19 +819,35 @@ impl AppState {
             weights: self.settings.weights,
             median_kernel: self.settings.median_kernel,
         };
+        let analyst = self.settings.reference == Reference::AnalystLabels;
+        let labeling = &self.labeling;
+        let reference = |i: usize, e: &super::dataset::ScenarioEntry| -> Vec<bool> {
+            labeling
+                .flags(i, e.labels.len())
+                .filter(|_| analyst)
+                .unwrap_or(&e.labels)
+                .to_vec()
+        };
+        let references: Vec<Vec<bool>> = dataset
+            .scenarios
+            .iter()
+            .enumerate()
+            .map(|(i, e)| reference(i, e))
+            .collect();
         self.analyses = dataset
             .scenarios
             .iter()
-            .map(|e| {
+            .zip(&references)
+            .map(|(e, labels)| {
                 e.scores()
-                    .map(|s| ScenarioAnalysis::fuse(s.table(), &e.labels, &params))
+                    .map(|s| ScenarioAnalysis::fuse(s.table(), labels, &params))
             })
             .collect();
         let scored = || {
             self.analyses
                 .iter()
-                .zip(&dataset.scenarios)
-                .filter_map(|(a, e)| a.as_ref().map(|a| (a, e.labels.as_slice())))
+                .zip(&references)
+                .filter_map(|(a, l)| a.as_ref().map(|a| (a, l.as_slice())))
         };
         self.metrics = DatasetMetrics::compute(scored());
         let reference = reference_threshold(&self.settings.weights);
@@ -538,13 +862,13 @@ impl AppState {
             ThresholdMode::Manual => self.settings.manual_threshold,
         };
         let mut failures = Vec::new();
-        for (i, (analysis, entry)) in self.analyses.iter_mut().zip(&dataset.scenarios).enumerate() {
+        for (i, (analysis, labels)) in self.analyses.iter_mut().zip(&references).enumerate() {
             if let Some(analysis) = analysis {
-                analysis.detect(&entry.labels, self.threshold);
+                analysis.detect(labels, self.threshold);
                 failures.extend(scenario_failures(
                     i,
                     analysis,
-                    &entry.labels,
+                    labels,
                     self.threshold,
                     self.settings.late_after,
                 ));
@@ -582,6 +906,40 @@ impl AppState {
     /// The current scenario's ground-truth flags (empty when none is open).
     pub fn labels(&self) -> &[bool] {
         self.entry().map_or(&[], |e| e.labels.as_slice())
+    }
+
+    /// The per-frame flags the metrics of the current scenario are measured against: the
+    /// analyst's intervals under [`Reference::AnalystLabels`] (when the labels are open),
+    /// else the ground truth.
+    pub fn reference_labels(&self) -> &[bool] {
+        let truth = self.labels();
+        match self.settings.reference {
+            Reference::AnalystLabels => self
+                .labeling
+                .flags(self.current, truth.len())
+                .unwrap_or(truth),
+            Reference::GroundTruth => truth,
+        }
+    }
+
+    /// The labeling mode: whether it is on, the mark, the selected box, the tag text.
+    pub fn labeling(&self) -> &Labeling {
+        &self.labeling
+    }
+
+    /// Whether the labeling mode is on.
+    pub fn is_labeling(&self) -> bool {
+        self.labeling.active
+    }
+
+    /// The tag text "tag range" uses, to edit.
+    pub fn tag_text_mut(&mut self) -> &mut String {
+        &mut self.labeling.tag_text
+    }
+
+    /// The current scenario's labels, when open.
+    pub fn current_labels(&self) -> Option<&ScenarioLabels> {
+        self.labeling.get(self.current)
     }
 
     /// Playback of the current scenario.

@@ -4,16 +4,18 @@
 //! formats as well (or only them, with `--labels-only`, which needs no scoring).
 
 use std::process::ExitCode;
+use std::sync::atomic::AtomicBool;
 
-use anyhow::Context;
 use clap::Args;
 use vadscope::annotate::{LabelFormat, export_labels};
-use vadscope::render::{self, FrameScene, Provenance, ScoreSeries, scores_csv};
-use vadscope::score::PixelReferenceMode;
+use vadscope::export::{
+    FileNaming, FrameRenderer, FrameView, FramesExport, export_frames, write_scores_csv,
+};
+use vadscope::score::FlowSource;
 use vadscope::sequence::Scenario;
 
 use super::labels::{open_editor, parse_format};
-use super::scenario_views::{ScenarioViewArgs, save_png};
+use super::scenario_views::ScenarioViewArgs;
 
 /// Options of `vadscope export`.
 #[derive(Debug, Args)]
@@ -45,60 +47,38 @@ pub fn run(args: ExportArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     let (scenario, cache, model) = target.open_scored()?;
-    let settings = target.settings();
-    let table = cache.table();
-    let series = ScoreSeries::compute(
-        table,
+    let renderer = FrameRenderer::new(
+        &scenario,
+        &cache,
         &scenario.frame_labels().flags,
-        &settings.weights,
-        settings.median_kernel,
+        target.settings(),
+        FlowSource::default(),
     );
     let out = target.create_out("")?;
-    let provenance = Provenance {
-        version: env!("CARGO_PKG_VERSION").to_string(),
-        scenario: scenario.name().to_string(),
-        model: model.display().to_string(),
-        model_hash: table.meta.key.model.0,
-        boxes: table.meta.key.boxes.clone(),
-        flow: table.meta.key.flow.clone(),
-        weights: settings.weights,
-        median_kernel: settings.median_kernel,
-        threshold: settings.threshold,
-    };
     let frames = if args.no_frames {
         None
     } else {
         Some(target.frames_in(&scenario)?)
     };
-    let csv_path = out.join("scores.csv");
-    std::fs::write(&csv_path, scores_csv(table, &series, &provenance))
-        .with_context(|| format!("cannot write {}", csv_path.display()))?;
+    write_scores_csv(
+        &out.join("scores.csv"),
+        cache.table(),
+        renderer.series(),
+        &renderer.provenance(&model),
+    )?;
     let mut written = 1;
     if let Some(frames) = frames {
-        let dir = target.create_out("frames")?;
-        let options = settings.options(table).frame;
-        let name = scenario.name().to_string();
-        for index in frames {
-            let scene = FrameScene::load(
-                &scenario,
-                &cache,
-                index,
-                &settings.weights,
-                PixelReferenceMode::Training,
-                None,
-            )?;
-            let objects = scene.scene_objects();
-            let caption = scene.caption(&name, &series, &settings);
-            let input = scene.frame_input(&objects, Some(&caption));
-            let size = target
-                .size
-                .unwrap_or_else(|| render::natural_size(scene.frame.dimensions(), &options));
-            save_png(
-                &render::frame_view(&input, &options, size),
-                &dir.join(format!("frame_{index:05}.png")),
-            )?;
-            written += 1;
-        }
+        let request = FramesExport {
+            out: out.clone(),
+            frames,
+            views: vec![FrameView::Frame],
+            size: target.size,
+            png: true,
+            gif: false,
+            naming: FileNaming::FramesFolder,
+        };
+        let summary = export_frames(&renderer, &request, &mut |_| {}, &AtomicBool::new(false))?;
+        written += summary.files.len();
     }
     written += write_labels(&scenario, &args.labels, target)?;
     println!("wrote {written} files to {}", out.display());

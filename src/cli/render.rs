@@ -1,20 +1,13 @@
 //! `vadscope render`: writes the views of a scenario's frames as PNG files (and animated
 //! GIFs), scoring the scenario first when it has no current score cache.
 
-use std::fs::File;
-use std::io::BufWriter;
-use std::path::Path;
 use std::process::ExitCode;
+use std::sync::atomic::AtomicBool;
 
-use anyhow::Context;
 use clap::{Args, ValueEnum};
-use image::codecs::gif::{GifEncoder, Repeat};
-use image::{Delay, Frame, RgbaImage};
-use vadscope::render::{
-    self, DashboardInput, FlowViewInput, FrameScene, PredViewInput, ScoreLabels, ScoreSeries,
-    TimelineOptions,
-};
-use vadscope::score::{FlowProvider, FlowSource, PixelReferenceMode};
+use vadscope::export::{FileNaming, FrameRenderer, FrameView, FramesExport, export_frames};
+use vadscope::render::{self, TimelineOptions};
+use vadscope::score::FlowSource;
 
 use super::scenario_views::{ScenarioViewArgs, save_png};
 
@@ -50,22 +43,15 @@ pub enum ViewArg {
 }
 
 impl ViewArg {
-    fn name(self) -> &'static str {
+    /// The per-frame view this is, if it is one.
+    fn frame_view(self) -> Option<FrameView> {
         match self {
-            Self::Dashboard => "dashboard",
-            Self::Frame => "frame",
-            Self::Pred => "pred",
-            Self::Flow => "flow",
-            Self::Timeline => "timeline",
-            Self::Roc => "roc",
+            Self::Dashboard => Some(FrameView::Dashboard),
+            Self::Frame => Some(FrameView::Frame),
+            Self::Pred => Some(FrameView::Pred),
+            Self::Flow => Some(FrameView::Flow),
+            Self::Timeline | Self::Roc => None,
         }
-    }
-
-    fn per_frame(self) -> bool {
-        matches!(
-            self,
-            Self::Dashboard | Self::Frame | Self::Pred | Self::Flow
-        )
     }
 }
 
@@ -75,24 +61,24 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
     let (scenario, cache, _) = target.open_scored()?;
     let frames = target.frames_in(&scenario)?;
     let out = target.create_out("")?;
-    let settings = target.settings();
-    let table = cache.table();
-    let series = ScoreSeries::compute(
-        table,
+    let renderer = FrameRenderer::new(
+        &scenario,
+        &cache,
         &scenario.frame_labels().flags,
-        &settings.weights,
-        settings.median_kernel,
+        target.settings(),
+        FlowSource::default(),
     );
-    let options = settings.options(table);
+    let (series, settings) = (renderer.series(), renderer.settings());
     let windowed = target.frames.is_some();
-    let evaluation = ScoreLabels {
-        scores: &series.filtered[series.skip..],
-        labels: &series.truth[series.skip..],
-        threshold: Some(settings.threshold),
-    };
+    let evaluation = renderer.evaluation();
     let mut written = 0usize;
 
-    for view in args.view.iter().copied().filter(|v| !v.per_frame()) {
+    for view in args
+        .view
+        .iter()
+        .copied()
+        .filter(|v| v.frame_view().is_none())
+    {
         match view {
             ViewArg::Timeline => {
                 let timeline_options = TimelineOptions {
@@ -120,104 +106,20 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
         }
     }
 
-    let per_frame: Vec<ViewArg> = args
-        .view
-        .iter()
-        .copied()
-        .filter(|v| v.per_frame())
-        .collect();
-    if !per_frame.is_empty() {
-        let needs_flow = per_frame
-            .iter()
-            .any(|v| matches!(v, ViewArg::Dashboard | ViewArg::Flow));
-        let mut flows = FlowProvider::new(&scenario, FlowSource::default());
-        let mut animations: Vec<Vec<RgbaImage>> = vec![Vec::new(); per_frame.len()];
-        let name = scenario.name().to_string();
-        for index in frames.clone() {
-            let scene = FrameScene::load(
-                &scenario,
-                &cache,
-                index,
-                &settings.weights,
-                PixelReferenceMode::Training,
-                needs_flow.then_some(&mut flows),
-            )?;
-            let objects = scene.scene_objects();
-            let caption = scene.caption(&name, &series, &settings);
-            let frame_input = scene.frame_input(&objects, Some(&caption));
-            let dims = scene.frame.dimensions();
-            for (k, view) in per_frame.iter().enumerate() {
-                let image = match view {
-                    ViewArg::Frame => {
-                        let size = target
-                            .size
-                            .unwrap_or_else(|| render::natural_size(dims, &options.frame));
-                        render::frame_view(&frame_input, &options.frame, size)
-                    }
-                    ViewArg::Pred => {
-                        let input = PredViewInput {
-                            frame: &scene.frame,
-                            objects: &objects,
-                        };
-                        render::pred_view(
-                            &input,
-                            &options.pred,
-                            target.size.unwrap_or((2 * dims.0, 2 * dims.1)),
-                        )
-                    }
-                    ViewArg::Flow => {
-                        let input = FlowViewInput {
-                            frame: &scene.frame,
-                            flow: scene.flow.as_deref(),
-                            objects: &objects,
-                        };
-                        render::flow_view(
-                            &input,
-                            &options.flow,
-                            target.size.unwrap_or((3 * dims.0, 2 * dims.1)),
-                        )
-                    }
-                    _ => {
-                        let input = DashboardInput {
-                            frame: frame_input,
-                            flow: scene.flow.as_deref(),
-                            timeline: series.timeline(&[], Some(settings.threshold), Some(index)),
-                            evaluation: Some(evaluation),
-                        };
-                        render::dashboard(&input, &options, target.size.unwrap_or((1600, 1000)))
-                    }
-                };
-                save_png(&image, &out.join(format!("{}_{index:05}.png", view.name())))?;
-                written += 1;
-                if args.gif {
-                    animations[k].push(image);
-                }
-            }
-        }
-        if args.gif {
-            for (view, images) in per_frame.iter().zip(animations) {
-                let path = out.join(format!("{}.gif", view.name()));
-                write_gif(&images, &path)?;
-                written += 1;
-            }
-        }
+    let views: Vec<FrameView> = args.view.iter().filter_map(|v| v.frame_view()).collect();
+    if !views.is_empty() {
+        let request = FramesExport {
+            out: out.clone(),
+            frames,
+            views,
+            size: target.size,
+            png: true,
+            gif: args.gif,
+            naming: FileNaming::ByView,
+        };
+        let summary = export_frames(&renderer, &request, &mut |_| {}, &AtomicBool::new(false))?;
+        written += summary.files.len();
     }
     println!("wrote {written} files to {}", out.display());
     Ok(ExitCode::SUCCESS)
-}
-
-/// Writes `images` as an endlessly looping GIF at 10 frames/s.
-fn write_gif(images: &[RgbaImage], path: &Path) -> anyhow::Result<()> {
-    let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    let mut encoder = GifEncoder::new_with_speed(BufWriter::new(file), 10);
-    encoder
-        .set_repeat(Repeat::Infinite)
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    for image in images {
-        let frame = Frame::from_parts(image.clone(), 0, 0, Delay::from_numer_denom_ms(100, 1));
-        encoder
-            .encode_frame(frame)
-            .with_context(|| format!("cannot write {}", path.display()))?;
-    }
-    Ok(())
 }

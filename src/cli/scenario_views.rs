@@ -6,9 +6,10 @@
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, bail};
+use anyhow::Context;
 use clap::Args;
 use image::RgbaImage;
+use vadscope::export;
 use vadscope::render::{Colormap, ViewSettings};
 use vadscope::score::ScoreCache;
 use vadscope::sequence::Scenario;
@@ -53,19 +54,7 @@ impl ScenarioViewArgs {
 
     /// The asked frames clipped to `scenario`, with an error when nothing is left.
     pub fn frames_in(&self, scenario: &Scenario) -> anyhow::Result<Range<usize>> {
-        let n = scenario.len();
-        let frames = match &self.frames {
-            Some(r) => r.start.min(n)..r.end.min(n),
-            None => 0..n,
-        };
-        if frames.is_empty() {
-            bail!(
-                "{}: no frame in {:?} (the scenario has {n} frames)",
-                scenario.root().display(),
-                self.frames.clone().unwrap_or(0..0)
-            );
-        }
-        Ok(frames)
+        Ok(export::frames_in(scenario, self.frames.as_ref())?)
     }
 
     /// The view settings these options choose.
@@ -112,7 +101,5 @@ fn parse_frames(text: &str) -> Result<Range<usize>, String> {
 
 /// Writes `image` as PNG at `path`.
 pub fn save_png(image: &RgbaImage, path: &Path) -> anyhow::Result<()> {
-    image
-        .save(path)
-        .with_context(|| format!("cannot write {}", path.display()))
+    Ok(export::write_png(image, path)?)
 }

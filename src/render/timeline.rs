@@ -183,6 +183,32 @@ impl TimelineLayout {
             + ((frame as f64 - f0 as f64 + 0.5) * self.width() as f64 / n as f64) as f32
     }
 
+    /// The value range of the fused-score panel as drawn for `input` with `options`.
+    pub fn score_range(&self, input: &TimelineInput<'_>, options: &TimelineOptions) -> (f64, f64) {
+        let mut scored: Vec<&[f64]> = Vec::new();
+        if options.raw {
+            scored.push(input.fused);
+        }
+        if options.filtered {
+            scored.push(input.filtered);
+        }
+        value_range(&scored, &self.frames, input.threshold)
+    }
+
+    /// The pixel row of score `value` in the fused-score panel (`range` from
+    /// [`Self::score_range`]).
+    pub fn score_row(&self, value: f64, range: (f64, f64)) -> i32 {
+        row_of(value, &self.score_y, range)
+    }
+
+    /// The score at pixel row `y` of the fused-score panel (the inverse of
+    /// [`Self::score_row`], not clamped to the panel).
+    pub fn score_at(&self, y: f32, (lo, hi): (f64, f64)) -> f64 {
+        let rows = f64::from(self.score_y.end - self.score_y.start - 1).max(1.0);
+        let t = (f64::from(self.score_y.end - 1) - f64::from(y)) / rows;
+        lo + t * (hi - lo)
+    }
+
     /// Frames `a..b` drawn in plot column `c` (at least one frame).
     fn column_frames(&self, c: usize) -> Range<usize> {
         let (f0, n) = self.span();
@@ -450,14 +476,7 @@ pub(crate) fn draw_timeline(
         return;
     }
     let frames = layout.frames.clone();
-    let mut scored: Vec<&[f64]> = Vec::new();
-    if options.raw {
-        scored.push(input.fused);
-    }
-    if options.filtered {
-        scored.push(input.filtered);
-    }
-    let score_range = value_range(&scored, &frames, input.threshold);
+    let score_range = layout.score_range(input, options);
     let comp_range = value_range(&[input.z_r, input.z_p], &frames, None);
     let has_components = options.components && !layout.components_y.is_empty();
 

@@ -1,12 +1,16 @@
 //! Helpers shared by the `app_*` tests and the `app` benchmark: tiny generated data sets, a
-//! tiny random checkpoint with plausible training statistics, and synthetic score tables.
+//! tiny random checkpoint with plausible training statistics, synthetic score tables, and
+//! the viewer in a headless egui_kittest harness with a pointer-drag gesture.
 
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 
 use burn::tensor::Device;
-use vadscope::app::{AppState, Dataset, ScenarioEntry, ScoringSetup, ViewSettings};
+use egui_kittest::Harness;
+use vadscope::app::{
+    AppState, Dataset, Layout, ScenarioEntry, ScoringSetup, ViewSettings, ViewerApp,
+};
 use vadscope::eval::RobustStats;
 use vadscope::model::{
     CheckpointMeta, Hf2Vad, InputConventions, ModelConfig, NoiseRng, PixelStats, ScoreStats,
@@ -183,4 +187,32 @@ pub fn state_of_tables(scenarios: Vec<(&str, ScoreTable, Vec<bool>)>) -> AppStat
     );
     state.set_dataset(Dataset::from_entries("in memory", entries));
     state
+}
+
+/// The viewer over a scored generated data set (under `dir`), drawn at 1400×900.
+pub fn viewer_harness(dir: &Path) -> Harness<'static, ViewerApp> {
+    let root = generate_dataset(dir);
+    let model = tiny_checkpoint(dir);
+    let state = scored_state(&root, &model);
+    let app = ViewerApp::with_state(state, Layout::default());
+    let mut harness = Harness::builder()
+        .with_size(egui::vec2(1400.0, 900.0))
+        .wgpu()
+        .build_ui_state(|ui, app: &mut ViewerApp| app.show(ui), app);
+    harness.run();
+    harness
+}
+
+/// Presses the primary button at `from`, moves through the middle to `to` and releases.
+pub fn drag(h: &mut Harness<'_, ViewerApp>, from: egui::Pos2, to: egui::Pos2) {
+    h.hover_at(from);
+    h.run();
+    h.drag_at(from);
+    h.run();
+    h.hover_at(from + (to - from) * 0.5);
+    h.run();
+    h.hover_at(to);
+    h.run();
+    h.drop_at(to);
+    h.run();
 }

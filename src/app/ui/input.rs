@@ -42,6 +42,69 @@ const fn bind(
 /// without it).
 pub const BINDINGS: &[Binding] = &[
     bind(
+        Modifiers::COMMAND.plus(Modifiers::SHIFT),
+        Key::Z,
+        Action::Redo,
+        "Ctrl+Shift+Z or Ctrl+Y",
+        "labeling: redo",
+    ),
+    bind(
+        Modifiers::COMMAND,
+        Key::Z,
+        Action::Undo,
+        "Ctrl+Z",
+        "labeling: undo",
+    ),
+    bind(
+        Modifiers::COMMAND,
+        Key::Y,
+        Action::Redo,
+        "Ctrl+Y",
+        "labeling: redo",
+    ),
+    bind(
+        Modifiers::NONE,
+        Key::L,
+        Action::ToggleLabeling,
+        "L",
+        "labeling mode on / off",
+    ),
+    bind(
+        Modifiers::NONE,
+        Key::OpenBracket,
+        Action::StartInterval,
+        "[",
+        "labeling: start an interval at the cursor",
+    ),
+    bind(
+        Modifiers::NONE,
+        Key::CloseBracket,
+        Action::EndInterval,
+        "]",
+        "labeling: end the interval at the cursor",
+    ),
+    bind(
+        Modifiers::NONE,
+        Key::E,
+        Action::MoveNearestEdge,
+        "E",
+        "labeling: move the nearest interval edge to the cursor",
+    ),
+    bind(
+        Modifiers::NONE,
+        Key::T,
+        Action::TagRange,
+        "T",
+        "labeling: tag the range ([ to cursor, or the selected failure run)",
+    ),
+    bind(
+        Modifiers::NONE,
+        Key::Delete,
+        Action::DeleteSelectedBox,
+        "Delete",
+        "labeling: delete the selected box from this frame on",
+    ),
+    bind(
         Modifiers::NONE,
         Key::Space,
         Action::TogglePlay,
@@ -202,10 +265,20 @@ pub const BINDINGS: &[Binding] = &[
 pub const OTHER_KEYS: &[(&str, &str)] = &[
     ("Ctrl+O", "open a scenario or data set"),
     ("Ctrl+S", "export the current view as PNG"),
+    ("Ctrl+E", "export frames, GIF and scores.csv"),
     ("click / drag timeline", "seek"),
     ("wheel on timeline", "zoom (Shift+wheel or right-drag: pan)"),
     ("drag the threshold line", "move the threshold"),
     ("click a box", "inspect the object"),
+    (
+        "labeling: drag an interval edge",
+        "move it (labels lane of the timeline)",
+    ),
+    ("labeling: drag on the frame", "draw a box"),
+    (
+        "labeling: drag a box / a corner",
+        "move / resize it at this frame",
+    ),
     ("drop a folder", "open it"),
 ];
 

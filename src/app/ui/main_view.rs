@@ -1,21 +1,25 @@
 //! The main view: the image `render` draws for the current frame and view (frame with
 //! overlays, predicted vs actual, flow vs reconstruction), scaled to fit, with the view and
 //! overlay switches above it; hovering a box shows its scores, clicking selects it for the
-//! inspector; the shown image exports as PNG.
+//! inspector; the shown image exports as PNG. In the labeling mode, the labeling bar and
+//! the analyst's boxes (see [`super::labeling_view`]) take over the frame.
 
 use image::RgbaImage;
 
 use crate::app::settings::{Overlay, ViewMode, ViewSettings};
 use crate::app::state::{Action, AppState, LogLevel};
 
+use super::labeling_view::{self, BoxEditor};
 use super::texture::CachedTexture;
 use super::views::{self, FrameKey, ViewImage};
 
-/// The main view's own state: the texture, the image it holds (for export) and where the
-/// camera frame sits in it.
+/// The main view's own state: the texture, the image it holds (for export), where it was
+/// drawn on screen and the box editing of the labeling mode.
 pub struct MainView {
     texture: CachedTexture<FrameKey>,
     shown: Option<ViewImage>,
+    placed: Option<(egui::Rect, f32)>,
+    boxes: BoxEditor,
 }
 
 impl Default for MainView {
@@ -23,6 +27,8 @@ impl Default for MainView {
         Self {
             texture: CachedTexture::new("main view"),
             shown: None,
+            placed: None,
+            boxes: BoxEditor::default(),
         }
     }
 }
@@ -46,6 +52,9 @@ impl MainView {
                 }
             }
         });
+        if state.is_labeling() {
+            labeling_view::toolbar(ui, state);
+        }
         if state.entry().is_none() {
             ui.centered_and_justified(|ui| {
                 ui.label(
@@ -85,11 +94,28 @@ impl MainView {
             });
             return;
         };
+        let labeling = state.is_labeling() && settings.view == ViewMode::Frame;
+        let sense = if labeling {
+            egui::Sense::click_and_drag()
+        } else {
+            egui::Sense::click()
+        };
         let response = ui.add(
             egui::Image::new((texture.id(), egui::vec2(size.0 as f32, size.1 as f32) / ppp))
-                .sense(egui::Sense::click()),
+                .sense(sense),
         );
-        self.pointer(state, &response, ppp);
+        self.placed = Some((response.rect, ppp));
+        match (&self.shown, labeling) {
+            (Some(view), true) => self.boxes.show(ui, state, &response, view, ppp),
+            _ => self.pointer(state, &response, ppp),
+        }
+    }
+
+    /// The point on screen of frame pixel (x, y), as last drawn (frame view only).
+    pub fn screen_point(&self, x: f32, y: f32) -> Option<egui::Pos2> {
+        let (rect, ppp) = self.placed?;
+        let (ix, iy) = self.shown.as_ref()?.image_pixel(x, y)?;
+        Some(rect.min + egui::vec2(ix, iy) / ppp)
     }
 
     /// Hover tooltip and click selection of the box under the pointer.

@@ -4,10 +4,12 @@
 //! it actions or new settings.
 
 mod browser;
+mod export_dialog;
 mod failures;
 mod help;
 pub mod input;
 mod inspector;
+mod labeling_view;
 mod log;
 mod main_view;
 mod texture;
@@ -35,6 +37,7 @@ pub struct ViewerApp {
     weights: weights::WeightsPanel,
     failures: failures::FailurePanel,
     inspector: inspector::InspectorPanel,
+    export: export_dialog::ExportDialog,
 }
 
 /// How often a changed layout is written at most.
@@ -76,6 +79,7 @@ impl ViewerApp {
             weights: weights::WeightsPanel::default(),
             failures: failures::FailurePanel::default(),
             inspector: inspector::InspectorPanel::default(),
+            export: export_dialog::ExportDialog::default(),
         }
     }
 
@@ -89,6 +93,22 @@ impl ViewerApp {
         &mut self.state
     }
 
+    /// Where frame `frame` of the analyst-labels lane was drawn on the timeline (screen
+    /// points), for pointer tests and tools driving the window.
+    pub fn timeline_label_point(&self, frame: usize) -> Option<egui::Pos2> {
+        self.timeline.label_lane_point(frame)
+    }
+
+    /// Where score `value` above frame `frame` was drawn on the timeline's score panel.
+    pub fn timeline_score_point(&self, frame: usize, value: f64) -> Option<egui::Pos2> {
+        self.timeline.score_point(frame, value)
+    }
+
+    /// Where frame pixel (x, y) of the frame view was drawn on screen.
+    pub fn frame_point(&self, x: f32, y: f32) -> Option<egui::Pos2> {
+        self.main_view.screen_point(x, y)
+    }
+
     /// Opens a scenario or data set and remembers it among the recent ones.
     pub fn open(&mut self, path: &std::path::Path) {
         if self.state.open(path) {
@@ -99,7 +119,7 @@ impl ViewerApp {
     /// Draws one frame of the whole viewer into `ui`.
     pub fn show(&mut self, ui: &mut egui::Ui) {
         let ctx = ui.ctx().clone();
-        if self.state.poll_jobs() || self.state.is_scoring() {
+        if self.state.poll_jobs() || self.state.is_scoring() || self.state.is_exporting() {
             ctx.request_repaint_after(Duration::from_millis(100));
         }
         let dropped: Vec<PathBuf> = ctx.input(|i| {
@@ -121,9 +141,13 @@ impl ViewerApp {
         }
 
         let mut settings: ViewSettings = self.state.settings().clone();
-        if let Some(path) =
-            top_bar::show(ui, &mut self.state, &mut self.layout, &mut self.main_view)
-        {
+        if let Some(path) = top_bar::show(
+            ui,
+            &mut self.state,
+            &mut self.layout,
+            &mut self.main_view,
+            &mut self.export,
+        ) {
             self.open(&path);
         }
         self.show_side_panels(ui, &mut settings);
@@ -132,6 +156,7 @@ impl ViewerApp {
             self.main_view.show(ui, &mut self.state, &mut settings);
         });
         help::show(&ctx, &mut self.state);
+        self.export.show(&ctx, &mut self.state);
         if settings != *self.state.settings() {
             self.state.set_settings(settings);
         }

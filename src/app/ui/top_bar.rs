@@ -1,12 +1,13 @@
-//! The top bar: the File and View menus (open, recent data sets, exports, panels, help),
-//! where the analyst is (scenario, frame index and AnoVox id, ground truth) and the
-//! scoring job's progress with its cancel button.
+//! The top bar: the File and View menus (open, recent data sets, exports, panels, labeling
+//! mode, help), where the analyst is (scenario, frame index and AnoVox id, ground truth and
+//! labels) and the scoring and export jobs' progress with their cancel buttons.
 
 use std::path::PathBuf;
 
 use crate::app::layout::Layout;
 use crate::app::state::{Action, AppState};
 
+use super::export_dialog::{self, ExportDialog};
 use super::main_view::MainView;
 
 /// Draws the bar; returns a data set to open when the analyst chose one.
@@ -15,6 +16,7 @@ pub fn show(
     state: &mut AppState,
     layout: &mut Layout,
     main_view: &mut MainView,
+    export: &mut ExportDialog,
 ) -> Option<PathBuf> {
     let mut open = None;
     if ui
@@ -28,6 +30,12 @@ pub fn show(
         .input_mut(|i| i.consume_key(egui::Modifiers::COMMAND, egui::Key::S))
     {
         main_view.export_png(state);
+    }
+    if ui
+        .ctx()
+        .input_mut(|i| i.consume_key(egui::Modifiers::COMMAND, egui::Key::E))
+    {
+        export.open(state);
     }
     egui::Panel::top("top bar").show(ui, |ui| {
         ui.horizontal_wrapped(|ui| {
@@ -52,6 +60,13 @@ pub fn show(
                     main_view.export_png(state);
                     ui.close();
                 }
+                if ui
+                    .button("Export frames, GIF and scores.csv…  (Ctrl+E)")
+                    .clicked()
+                {
+                    export.open(state);
+                    ui.close();
+                }
                 if ui.button("Export failure cases as CSV…").clicked() {
                     super::failures::export(state);
                     ui.close();
@@ -63,6 +78,10 @@ pub fn show(
                 ui.checkbox(&mut layout.timeline_open, "Timeline");
                 ui.checkbox(&mut layout.log_open, "Log");
                 ui.separator();
+                let mut labeling = state.is_labeling();
+                if ui.checkbox(&mut labeling, "Labeling mode (L)").changed() {
+                    state.apply(Action::ToggleLabeling);
+                }
                 if ui.button("Keys (F1)").clicked() {
                     state.apply(Action::ToggleHelp);
                     ui.close();
@@ -71,6 +90,10 @@ pub fn show(
             ui.separator();
             where_am_i(ui, state);
             scoring_status(ui, state);
+            if state.is_exporting() {
+                ui.separator();
+                export_dialog::progress(ui, state);
+            }
         });
     });
     open
@@ -97,6 +120,22 @@ fn where_am_i(ui: &mut egui::Ui, state: &AppState) {
         );
     } else {
         ui.weak("normal (ground truth)");
+    }
+    if let Some(labels) = state.current_labels() {
+        let cell = labels
+            .lane()
+            .cells
+            .get(info.index)
+            .copied()
+            .unwrap_or_default();
+        if cell.anomalous() {
+            ui.colored_label(egui::Color32::from_rgb(255, 150, 40), "anomaly (labels)");
+        } else {
+            ui.weak("normal (labels)");
+        }
+    }
+    if state.is_labeling() {
+        ui.colored_label(egui::Color32::from_rgb(255, 150, 40), "LABELING");
     }
     if state.playback().is_playing() {
         ui.label("playing");

@@ -10,9 +10,8 @@ use crate::app::error::AppError;
 use crate::app::settings::{ViewMode, ViewSettings};
 use crate::app::state::AppState;
 use crate::render::{
-    Caption, DashboardOptions, FlowViewInput, FrameScene, FrameViewInput, FrameViewOptions,
-    PredViewInput, SceneObject, ScoreLabels, ViewSettings as RenderSettings, flow_view, frame_view,
-    natural_size, pred_view, roc_chart,
+    Caption, FlowViewInput, FrameScene, FrameViewInput, FrameViewOptions, PredViewInput,
+    SceneObject, ScoreLabels, flow_view, frame_view, natural_size, pred_view, roc_chart,
 };
 use crate::score::{FlowProvider, PixelReferenceMode};
 
@@ -25,6 +24,7 @@ pub struct FrameKey {
     selected: Option<u64>,
     settings: ViewSettings,
     threshold: u64,
+    labeling: bool,
     size: (u32, u32),
 }
 
@@ -38,6 +38,7 @@ impl FrameKey {
             selected: state.selected_track(),
             settings: state.settings().clone(),
             threshold: state.threshold().to_bits(),
+            labeling: state.is_labeling(),
             size,
         }
     }
@@ -50,6 +51,8 @@ pub struct ViewImage {
     /// Where the camera frame lies in the image: its top-left corner and image pixels per
     /// frame pixel (the frame view only; the other views are not hit-tested).
     frame_place: Option<(f32, f32, f32)>,
+    /// The camera frame's size in pixels.
+    pub frame_size: (u32, u32),
 }
 
 impl ViewImage {
@@ -58,6 +61,17 @@ impl ViewImage {
         let (x0, y0, scale) = self.frame_place?;
         let (fx, fy) = ((x - x0) / scale, (y - y0) / scale);
         (fx >= 0.0 && fy >= 0.0).then_some((fx, fy))
+    }
+
+    /// The image pixel of frame pixel (x, y) (the inverse of [`Self::frame_pixel`]).
+    pub fn image_pixel(&self, x: f32, y: f32) -> Option<(f32, f32)> {
+        let (x0, y0, scale) = self.frame_place?;
+        Some((x0 + x * scale, y0 + y * scale))
+    }
+
+    /// Image pixels per frame pixel (the frame view only).
+    pub fn scale(&self) -> Option<f32> {
+        self.frame_place.map(|(_, _, scale)| scale)
     }
 }
 
@@ -85,30 +99,6 @@ fn fit_frame_view(
         (fh * scale).round().max(1.0) as u32,
     );
     (scale, natural_size(scaled, options))
-}
-
-/// The view options `vadscope render` would use for these settings (ranges from the
-/// model's training statistics when scored), with the analyst's overlays and opacity.
-fn view_options(state: &AppState) -> DashboardOptions {
-    let settings = state.settings();
-    let shared = RenderSettings {
-        weights: settings.weights,
-        threshold: state.threshold(),
-        colormap: settings.colormap,
-        auto_range: false,
-        median_kernel: settings.median_kernel,
-    };
-    let mut options = match state.entry().and_then(|e| e.scores()) {
-        Some(scores) => shared.options(scores.table()),
-        None => DashboardOptions::default(),
-    };
-    let o = &settings.overlays;
-    options.frame.heatmap = o.heatmap;
-    options.frame.boxes = o.boxes;
-    options.frame.mask = o.mask;
-    options.frame.caption = o.caption;
-    options.frame.opacity = settings.opacity;
-    options
 }
 
 /// The current frame's scene: from the score cache when scored, else the bare frame with
@@ -174,7 +164,7 @@ pub fn main_image(state: &AppState, size: (u32, u32)) -> Result<Option<ViewImage
         return Ok(None);
     };
     let objects = scene.scene_objects();
-    let options = view_options(state);
+    let options = state.dashboard_options();
     let mut frame_place = None;
     let image = match settings.view {
         ViewMode::Frame => {
@@ -196,7 +186,10 @@ pub fn main_image(state: &AppState, size: (u32, u32)) -> Result<Option<ViewImage
                 caption: Some(&caption),
             };
             let frame = scene.frame.dimensions();
-            let (scale, view) = fit_frame_view(frame, &options.frame, size);
+            // render leaves the colour bar out when there is no heatmap (unscored).
+            let mut fit = options.frame;
+            fit.heatmap &= scene.heatmap.is_some();
+            let (scale, view) = fit_frame_view(frame, &fit, size);
             let scaled_h = (frame.1 as f32 * scale).round();
             frame_place = Some((
                 0.0,
@@ -223,7 +216,11 @@ pub fn main_image(state: &AppState, size: (u32, u32)) -> Result<Option<ViewImage
             size,
         ),
     };
-    Ok(Some(ViewImage { image, frame_place }))
+    Ok(Some(ViewImage {
+        image,
+        frame_place,
+        frame_size: scene.frame.dimensions(),
+    }))
 }
 
 /// The selected object's actual, predicted and error patches (render's prediction view
@@ -249,7 +246,7 @@ pub fn object_image(
             frame: &scene.frame,
             objects: &objects,
         },
-        &view_options(state).pred,
+        &state.dashboard_options().pred,
         size,
     )))
 }
@@ -257,7 +254,7 @@ pub fn object_image(
 /// The ROC chart of the current scenario's metric frames at `size`.
 pub fn roc_image(state: &AppState, size: (u32, u32)) -> Option<RgbaImage> {
     let analysis = state.current_analysis()?;
-    let (scores, labels) = metric_frames(&analysis.series, state.labels());
+    let (scores, labels) = metric_frames(&analysis.series, state.reference_labels());
     Some(roc_chart(
         &ScoreLabels {
             scores,

@@ -1,10 +1,11 @@
 //! The weights panel: sliders and numeric fields for the four fusion weights, the median
 //! filter, the threshold (reference, F1-max or manual), colormap and heatmap opacity; the
-//! presets; and
-//! the live metrics of the scenario and the whole data set with a small ROC chart. Every
-//! change goes back as new settings and is re-fused before the next frame is drawn.
+//! presets; the switch of what the metrics are measured against (ground truth or the
+//! analyst's labels); and the live metrics of the scenario and the whole data set with a
+//! small ROC chart. Every change goes back as new settings and is re-fused before the next
+//! frame is drawn.
 
-use crate::app::settings::{ThresholdMode, ViewSettings};
+use crate::app::settings::{Reference, ThresholdMode, ViewSettings};
 use crate::app::state::AppState;
 use crate::eval::ScoreMetrics;
 use crate::render::Colormap;
@@ -30,6 +31,7 @@ impl Default for WeightsPanel {
 #[derive(PartialEq)]
 struct RocKey {
     scenario: usize,
+    labels: Option<u64>,
     settings: ViewSettings,
     threshold: u64,
     scored: usize,
@@ -95,11 +97,30 @@ impl WeightsPanel {
 
         ui.separator();
         ui.heading("Metrics");
+        ui.horizontal_wrapped(|ui| {
+            ui.label("reference:");
+            for (k, reference) in Reference::ALL.into_iter().enumerate() {
+                if k > 0 {
+                    ui.label("|");
+                }
+                ui.selectable_value(&mut settings.reference, reference, reference.name())
+                    .on_hover_text(
+                        "what AUROC, FPR95, failure cases and detection latency are measured against",
+                    );
+            }
+        });
+        if state.settings().reference == Reference::AnalystLabels {
+            ui.colored_label(
+                egui::Color32::from_rgb(255, 150, 40),
+                "measured against the analyst's labels (not the ground truth)",
+            );
+        }
         metrics_grid(ui, state);
         let size = (ui.available_width().clamp(120.0, 320.0) as u32, 180);
         let key = RocKey {
             scenario: state.current_scenario(),
-            settings: settings.clone(),
+            labels: state.current_labels().map(|l| l.editor().seq()),
+            settings: state.settings().clone(),
             threshold: state.threshold().to_bits(),
             scored: state.dataset_metrics().scenarios,
         };
