@@ -96,12 +96,20 @@ impl RocCurve {
                 positive: positives > 0,
             });
         }
-        let mut order: Vec<(f64, bool)> =
-            scores.iter().copied().zip(labels.iter().copied()).collect();
-        // Ties may come out in any order: the points are taken at the last sample of each
-        // distinct score, so the curve does not depend on it. Both cores halve the sort,
-        // the bulk of a re-evaluation.
-        order.par_sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+        // Sorting integer keys that order like `f64::total_cmp` is cheaper than comparing
+        // floats; ties may come out in any order because the points are taken at the last
+        // sample of each distinct score. Both cores halve the sort, the bulk of a
+        // re-evaluation.
+        let mut keyed: Vec<(i64, bool)> = scores
+            .iter()
+            .map(|s| total_order_key(*s))
+            .zip(labels.iter().copied())
+            .collect();
+        keyed.par_sort_unstable_by(|a, b| b.0.cmp(&a.0));
+        let order: Vec<(f64, bool)> = keyed
+            .into_iter()
+            .map(|(key, label)| (score_of_key(key), label))
+            .collect();
 
         let mut points = Vec::with_capacity(order.len() + 1);
         points.push(RocPoint {
@@ -242,6 +250,18 @@ impl ScoreMetrics {
     }
 }
 
+/// An integer that orders like `f64::total_cmp`: negative floats have their magnitude
+/// bits flipped so that larger magnitudes sort lower.
+fn total_order_key(score: f64) -> i64 {
+    let bits = score.to_bits() as i64;
+    bits ^ (((bits >> 63) as u64) >> 1) as i64
+}
+
+/// The score whose [`total_order_key`] is `key` (the map is its own inverse).
+fn score_of_key(key: i64) -> f64 {
+    f64::from_bits((key ^ (((key >> 63) as u64) >> 1) as i64) as u64)
+}
+
 /// Mean of the per-group AUROCs (macro AUROC), skipping groups with a single class as
 /// scikit-learn cannot score them. Returns the mean and the number of groups used, or
 /// `None` when no group has both classes.
@@ -261,4 +281,41 @@ pub fn macro_auroc<'a>(
         }
     }
     Ok((used > 0).then(|| (sum / used as f64, used)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn order_keys_sort_like_total_cmp_and_invert() {
+        let scores = [
+            f64::NEG_INFINITY,
+            -1e300,
+            -2.5,
+            -f64::MIN_POSITIVE,
+            -0.0,
+            0.0,
+            f64::MIN_POSITIVE,
+            3.0,
+            1e300,
+            f64::INFINITY,
+        ];
+        for pair in scores.windows(2) {
+            assert!(
+                total_order_key(pair[0]) < total_order_key(pair[1]),
+                "{pair:?}"
+            );
+        }
+        for s in scores {
+            assert_eq!(score_of_key(total_order_key(s)).to_bits(), s.to_bits());
+        }
+    }
+
+    #[test]
+    fn negative_scores_rank_below_positive_ones() {
+        let curve = RocCurve::compute(&[-3.0, -1.0, 0.5, 2.0], &[false, false, true, true])
+            .expect("both classes");
+        assert_eq!(curve.auroc(), 1.0);
+    }
 }

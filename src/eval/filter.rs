@@ -27,11 +27,22 @@ pub fn median_filter(values: &[f64], kernel: usize) -> Vec<f64> {
     for i in 0..values.len() as isize {
         filtered.push(window[half]);
         let outgoing = padded(i - half as isize);
-        let at = window.partition_point(|v| v.total_cmp(&outgoing).is_lt());
-        window.remove(at);
         let incoming = padded(i + half as isize + 1);
-        let at = window.partition_point(|v| v.total_cmp(&incoming).is_lt());
-        window.insert(at, incoming);
+        if outgoing.to_bits() == incoming.to_bits() {
+            continue;
+        }
+        // The outgoing sample's slot becomes a hole that walks towards the incoming
+        // sample's place, shifting the neighbours it passes by one.
+        let mut at = window.partition_point(|v| v.total_cmp(&outgoing).is_lt());
+        while at + 1 < window.len() && window[at + 1].total_cmp(&incoming).is_lt() {
+            window[at] = window[at + 1];
+            at += 1;
+        }
+        while at > 0 && window[at - 1].total_cmp(&incoming).is_gt() {
+            window[at] = window[at - 1];
+            at -= 1;
+        }
+        window[at] = incoming;
     }
     filtered
 }
