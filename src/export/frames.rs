@@ -10,8 +10,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use image::RgbaImage;
 
 use crate::render::{
-    self, DashboardInput, DashboardOptions, FlowViewInput, FrameScene, FrameViewInput,
-    PredViewInput, Provenance, ScoreLabels, ScoreSeries, ViewSettings,
+    self, DashboardInput, DashboardOptions, FlowViewInput, FrameScene, PredViewInput, Provenance,
+    ScoreLabels, ScoreSeries, ViewSettings,
 };
 use crate::score::{FlowProvider, FlowSource, PixelReferenceMode, ScoreCache};
 use crate::sequence::Scenario;
@@ -191,13 +191,7 @@ impl<'a> FrameRenderer<'a> {
         )?;
         let objects = scene.scene_objects();
         let caption = scene.caption(self.scenario.name(), &self.series, &self.settings);
-        let frame_input = FrameViewInput {
-            frame: &scene.frame,
-            objects: &objects,
-            heatmap: scene.heatmap.as_ref(),
-            anomaly_mask: scene.mask.as_deref(),
-            caption: Some(&caption),
-        };
+        let frame_input = scene.frame_input(&objects, Some(&caption));
         let dims = scene.frame.dimensions();
         let options = &self.options;
         Ok(views

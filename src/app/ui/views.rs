@@ -10,8 +10,8 @@ use crate::app::error::AppError;
 use crate::app::settings::{ViewMode, ViewSettings};
 use crate::app::state::AppState;
 use crate::render::{
-    Caption, FlowViewInput, FrameScene, FrameViewInput, FrameViewOptions, PredViewInput,
-    SceneObject, ScoreLabels, flow_view, frame_view, natural_size, pred_view, roc_chart,
+    Caption, FlowViewInput, FrameScene, FrameViewOptions, PredViewInput, SceneObject, ScoreLabels,
+    flow_view, frame_view, natural_size, pred_view, roc_chart,
 };
 use crate::score::{FlowProvider, PixelReferenceMode};
 
@@ -178,13 +178,7 @@ pub fn main_image(state: &AppState, size: (u32, u32)) -> Result<Option<ViewImage
                 weights: Some(settings.weights),
                 truth: Some(info.anomalous),
             };
-            let input = FrameViewInput {
-                frame: &scene.frame,
-                objects: &objects,
-                heatmap: scene.heatmap.as_ref(),
-                anomaly_mask: scene.mask.as_deref(),
-                caption: Some(&caption),
-            };
+            let input = scene.frame_input(&objects, Some(&caption));
             let frame = scene.frame.dimensions();
             // render leaves the colour bar out when there is no heatmap (unscored).
             let mut fit = options.frame;
