@@ -5,10 +5,8 @@
 
 use std::ops::Range;
 use std::path::PathBuf;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
-use std::thread::JoinHandle;
+use std::sync::atomic::AtomicBool;
+use std::sync::mpsc::Sender;
 
 use crate::export::{
     ExportError, ExportProgress, FileNaming, FrameRenderer, FrameView, FramesExport, export_frames,
@@ -18,6 +16,8 @@ use crate::model::bundled_model;
 use crate::render::{DashboardOptions, ViewSettings as RenderSettings};
 use crate::score::{CacheKey, FlowSource, ScoreCache};
 use crate::sequence::Scenario;
+
+use super::background::BackgroundThread;
 
 /// What the analyst asks to export (the export dialog's choices).
 #[derive(Debug, Clone, PartialEq)]
@@ -69,66 +69,34 @@ pub enum ExportEvent {
 /// A running (or finished) export.
 #[derive(Debug)]
 pub struct ExportJob {
-    events: Receiver<ExportEvent>,
-    cancel: Arc<AtomicBool>,
-    thread: Option<JoinHandle<()>>,
+    thread: BackgroundThread<ExportEvent>,
     out: PathBuf,
 }
 
 impl ExportJob {
     /// Starts writing `request`.
     pub fn start(request: ExportRequest) -> Self {
-        let (sender, events) = channel();
-        let cancel = Arc::new(AtomicBool::new(false));
-        let flag = Arc::clone(&cancel);
         let out = request.choice.out.clone();
-        let thread = std::thread::Builder::new()
-            .name("vadscope-export".into())
-            .spawn(move || {
-                let result = run(&request, &sender, &flag).map_err(|e| e.to_string());
-                let _ = sender.send(ExportEvent::Finished(result));
-            })
-            .ok();
-        Self {
-            events,
-            cancel,
-            thread,
-            out,
-        }
+        let thread = BackgroundThread::spawn("vadscope-export", move |sender, cancel| {
+            let result = run(&request, sender, cancel).map_err(|e| e.to_string());
+            let _ = sender.send(ExportEvent::Finished(result));
+        });
+        Self { thread, out }
     }
 
     /// The events that have arrived since the last call (never blocks).
     pub fn poll(&mut self) -> Vec<ExportEvent> {
-        let mut out = Vec::new();
-        loop {
-            match self.events.try_recv() {
-                Ok(event) => out.push(event),
-                Err(TryRecvError::Empty) => break,
-                Err(TryRecvError::Disconnected) => {
-                    if let Some(thread) = self.thread.take() {
-                        let _ = thread.join();
-                    }
-                    break;
-                }
-            }
-        }
-        out
+        self.thread.poll()
     }
 
     /// Asks the job to stop before its next frame.
     pub fn cancel(&self) {
-        self.cancel.store(true, Ordering::Relaxed);
+        self.thread.cancel();
     }
 
     /// The folder being written.
     pub fn out(&self) -> &std::path::Path {
         &self.out
-    }
-}
-
-impl Drop for ExportJob {
-    fn drop(&mut self) {
-        self.cancel();
     }
 }
 

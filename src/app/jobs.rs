@@ -5,15 +5,14 @@
 //! that the scoring run checks between batches (nothing half-done is written).
 
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
-use std::thread::JoinHandle;
+use std::sync::mpsc::Sender;
 
 use crate::model::{Detector, bundled_model};
 use crate::score::{ModelKey, ScoreCache, ScoreError, ScoreProgress, ScoreRequest, score_scenario};
 use crate::sequence::Scenario;
 
+use super::background::BackgroundThread;
 use super::error::AppError;
 
 /// Which model scores, and with which boxes and flows.
@@ -62,65 +61,36 @@ pub enum JobEvent {
 /// A running (or finished) scoring job.
 #[derive(Debug)]
 pub struct ScoringJob {
-    events: Receiver<JobEvent>,
-    cancel: Arc<AtomicBool>,
-    thread: Option<JoinHandle<()>>,
+    thread: BackgroundThread<JobEvent>,
 }
 
 impl ScoringJob {
     /// Starts scoring `scenarios` (data-set index and folder), in the given order.
     pub fn start(setup: ScoringSetup, scenarios: Vec<(usize, PathBuf)>) -> Self {
-        let (sender, events) = channel();
-        let cancel = Arc::new(AtomicBool::new(false));
-        let flag = Arc::clone(&cancel);
-        let thread = std::thread::Builder::new()
-            .name("vadscope-scoring".into())
-            .spawn(move || run_job(&setup, &scenarios, &sender, &flag))
-            .ok();
-        Self {
-            events,
-            cancel,
-            thread,
-        }
+        let thread = BackgroundThread::spawn("vadscope-scoring", move |sender, cancel| {
+            run_job(&setup, &scenarios, sender, cancel)
+        });
+        Self { thread }
     }
 
     /// The events that have arrived since the last call (never blocks).
     pub fn poll(&mut self) -> Vec<JobEvent> {
-        let mut out = Vec::new();
-        loop {
-            match self.events.try_recv() {
-                Ok(event) => out.push(event),
-                Err(TryRecvError::Empty) => break,
-                Err(TryRecvError::Disconnected) => {
-                    if let Some(thread) = self.thread.take() {
-                        let _ = thread.join();
-                    }
-                    break;
-                }
-            }
-        }
-        out
+        self.thread.poll()
     }
 
     /// Whether the job's thread has ended (all its events may still wait in [`Self::poll`]).
     pub fn is_finished(&self) -> bool {
-        self.thread.as_ref().is_none_or(JoinHandle::is_finished)
+        self.thread.is_finished()
     }
 
     /// Asks the job to stop after the current batch.
     pub fn cancel(&self) {
-        self.cancel.store(true, Ordering::Relaxed);
+        self.thread.cancel();
     }
 
     /// Whether cancelling has been asked for.
     pub fn is_cancelling(&self) -> bool {
-        self.cancel.load(Ordering::Relaxed)
-    }
-}
-
-impl Drop for ScoringJob {
-    fn drop(&mut self) {
-        self.cancel();
+        self.thread.is_cancelling()
     }
 }
 

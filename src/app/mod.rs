@@ -15,6 +15,7 @@
 //! between runs. [`run`] opens the window.
 
 pub mod analysis;
+pub mod background;
 pub mod dataset;
 pub mod error;
 pub mod export_job;
