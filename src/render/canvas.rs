@@ -1,33 +1,14 @@
 //! The drawing surface of every view: an opaque RGB raster with alpha-blended rectangles,
 //! lines, scaled image blits and text in the shipped DejaVu Sans font (no system fonts, so
-//! the same inputs give the same bytes everywhere). Charts draw on it through plotters'
-//! bitmap backend ([`Canvas::plotters`]).
-
-use std::cell::RefCell;
-use std::collections::HashMap;
-use std::rc::Rc;
-use std::sync::OnceLock;
+//! the same inputs give the same bytes everywhere, set by [`super::text`]). Charts draw on
+//! it through plotters ([`Canvas::plotters`]).
 
 use image::{RgbImage, RgbaImage};
 use plotters::backend::BitMapBackend;
-use plotters::prelude::{FontStyle, IntoFont};
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-/// The font every view writes with.
-const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
-
-/// Font family name under which [`FONT`] is registered with plotters.
-pub(crate) const FAMILY: &str = "sans-serif";
-
-/// Registers the shipped font with plotters (once per process).
-pub(crate) fn ensure_font() {
-    static REGISTERED: OnceLock<()> = OnceLock::new();
-    REGISTERED.get_or_init(|| {
-        // The font is compiled in and known to parse; a failure would leave text blank,
-        // never crash a render.
-        let _ = plotters::style::register_font(FAMILY, FontStyle::Normal, FONT);
-    });
-}
+use super::chart_backend::ChartBackend;
+use super::text::rasterized;
 
 /// Where a text's anchor point lies on the text.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -79,11 +60,8 @@ pub(crate) struct Canvas {
 }
 
 impl Canvas {
-    /// A canvas of `width`×`height` (at least 1×1) filled with `background`. Registers the
-    /// font first: plotters resolves a font when its style is made, so it must be known
-    /// before any view builds a text style.
+    /// A canvas of `width`×`height` (at least 1×1) filled with `background`.
     pub(crate) fn new(width: u32, height: u32, background: [u8; 3]) -> Self {
-        ensure_font();
         let (width, height) = (width.max(1), height.max(1));
         let pixels = background.repeat(width as usize * height as usize);
         Self {
@@ -385,14 +363,32 @@ impl Canvas {
         rasterized(text, size).map_or((0, 0), |r| (r.width, r.height))
     }
 
-    /// The largest size at most `size` (and at least 7 pixels) at which `text` is at most
-    /// `width` pixels wide; 7 when even that is wider.
-    pub(crate) fn fitting_size(text: &str, size: f64, width: u32) -> f64 {
+    /// `text` made to fit `width` pixels: drawn at the largest size at most `size` (and at
+    /// least 7 pixels) at which it fits, and cut short with an ellipsis when even 7 pixels
+    /// is too wide. Returns the text to draw and its size.
+    pub(crate) fn fitted(text: &str, size: f64, width: u32) -> (String, f64) {
         let mut size = size;
         while size > 7.0 && Self::text_size(text, size).0 > width {
             size = (size - 1.0).max(7.0);
         }
-        size
+        if Self::text_size(text, size).0 <= width {
+            return (text.to_string(), size);
+        }
+        let chars: Vec<char> = text.chars().collect();
+        let mut keep = chars.len();
+        while keep > 0 {
+            keep -= 1;
+            let cut: String = chars[..keep]
+                .iter()
+                .collect::<String>()
+                .trim_end()
+                .to_string()
+                + "…";
+            if Self::text_size(&cut, size).0 <= width {
+                return (cut, size);
+            }
+        }
+        (String::new(), size)
     }
 
     /// Draws `text` at `size` pixels with its `anchor` at (x, y); clipped to the canvas.
@@ -451,65 +447,13 @@ impl Canvas {
         self.text(x + pad, y + pad, text, size, color, Anchor::TopLeft);
     }
 
-    /// plotters' bitmap backend over this canvas, for charts.
-    pub(crate) fn plotters(&mut self) -> BitMapBackend<'_> {
-        ensure_font();
-        BitMapBackend::with_buffer(&mut self.pixels, (self.width, self.height))
+    /// A plotters backend over this canvas, for charts.
+    pub(crate) fn plotters(&mut self) -> ChartBackend<'_> {
+        ChartBackend::new(BitMapBackend::with_buffer(
+            &mut self.pixels,
+            (self.width, self.height),
+        ))
     }
-}
-
-/// A text rasterised once in the shipped font: its layout box and the coverage of every
-/// pixel it touches, relative to the box's top-left corner.
-struct RasterText {
-    width: u32,
-    height: u32,
-    coverage: Vec<(i32, i32, f32)>,
-}
-
-/// Texts rasterised at most before the cache starts afresh (views draw a few hundred).
-const RASTER_CACHE: usize = 4096;
-
-thread_local! {
-    /// Rasterised texts by size (its bits) and text: views redraw the same titles, labels
-    /// and numbers every frame, and glyph outlines are the expensive part of text.
-    static RASTERS: RefCell<HashMap<u64, HashMap<String, Rc<RasterText>>>> =
-        RefCell::new(HashMap::new());
-}
-
-/// `text` at `size` pixels, from the cache or rasterised now; `None` when the font cannot
-/// lay it out.
-fn rasterized(text: &str, size: f64) -> Option<Rc<RasterText>> {
-    let cached = RASTERS.with_borrow(|cache| {
-        cache
-            .get(&size.to_bits())
-            .and_then(|texts| texts.get(text).cloned())
-    });
-    if cached.is_some() {
-        return cached;
-    }
-    ensure_font();
-    let font = (FAMILY, size).into_font();
-    let ((min_x, min_y), (max_x, max_y)) = font.layout_box(text).ok()?;
-    let mut coverage = Vec::new();
-    let _ = font.draw(text, (0, 0), |px, py, alpha| {
-        coverage.push((px - min_x, py - min_y, alpha));
-        Ok::<(), ()>(())
-    });
-    let raster = Rc::new(RasterText {
-        width: (max_x - min_x).max(0) as u32,
-        height: (max_y - min_y).max(0) as u32,
-        coverage,
-    });
-    RASTERS.with_borrow_mut(|cache| {
-        if cache.values().map(HashMap::len).sum::<usize>() >= RASTER_CACHE {
-            cache.clear();
-        }
-        cache
-            .entry(size.to_bits())
-            .or_default()
-            .insert(text.to_string(), Rc::clone(&raster));
-    });
-    Some(raster)
 }
 
 /// Blends `color` over the RGB pixel `px` with opacity `alpha`.

@@ -10,7 +10,8 @@ use plotters::prelude::*;
 
 use crate::eval::RocCurve;
 
-use super::canvas::{Anchor, Canvas, FAMILY, render_view};
+use super::canvas::{Anchor, Canvas, render_view};
+use super::chart_backend::{ChartBackend, FAMILY};
 use super::legend::{LEGEND_TEXT, short_number};
 
 /// Colour of normal frames in the histogram.
@@ -58,7 +59,7 @@ fn label_style(size: f64) -> TextStyle<'static> {
 
 /// The chart area both charts draw into.
 type Chart<'a, 'b> =
-    ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+    ChartContext<'a, ChartBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
 /// The frame of a chart: title, axis ranges, descriptions and tick labels (six on x).
 struct Axes<'a> {
@@ -76,13 +77,18 @@ struct Axes<'a> {
 /// A chart over the whole of `root` with the title, axes, grid and tick labels of `axes`
 /// drawn, ready for its content; `None` when the area is too small for one.
 fn chart_on<'a, 'b>(
-    root: &'a DrawingArea<BitMapBackend<'b>, Shift>,
+    root: &'a DrawingArea<ChartBackend<'b>, Shift>,
     axes: &Axes<'_>,
 ) -> Option<Chart<'a, 'b>> {
     let size = root.dim_in_pixel();
     let f = font(size);
-    let left = (size.0 / 7).clamp(0, 56);
-    let bottom = (size.1 / 7).clamp(0, 40);
+    // Tick labels sit two tick lengths (10 px) off the axis, the description beyond them;
+    // a small chart gets the room they need, up to a third of its side.
+    let text_h = Canvas::text_size("Ag", f).1;
+    let needed_left = Canvas::text_size("0000", f).0 + text_h + 16;
+    let needed_bottom = 2 * text_h + 16;
+    let left = needed_left.max((size.0 / 7).min(56)).min(size.0 / 3);
+    let bottom = needed_bottom.max((size.1 / 7).min(40)).min(size.1 / 3);
     let mut builder = ChartBuilder::on(root);
     builder
         .margin(6)

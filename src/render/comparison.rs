@@ -68,11 +68,12 @@ pub(crate) fn draw_comparison(
     let mut places: Vec<Placement> = Vec::with_capacity(panels.len());
     for (k, panel) in panels.iter().enumerate() {
         let px = x + (k as u32 * each) as i32;
+        let (title, size) = Canvas::fitted(panel.title, font, each.saturating_sub(6));
         canvas.text(
             px + each as i32 / 2,
             y + 2,
-            panel.title,
-            Canvas::fitting_size(panel.title, font, each.saturating_sub(6)),
+            &title,
+            size,
             LEGEND_TEXT,
             Anchor::TopCenter,
         );

@@ -203,6 +203,11 @@ pub(crate) fn caption_height(height: u32) -> u32 {
     }
 }
 
+/// Contour width in display pixels: one pixel is lost in the texture of a full-size frame.
+fn contour_thickness(width: u32) -> u32 {
+    if width >= 320 { 2 } else { 1 }
+}
+
 fn caption_font(height: u32) -> f64 {
     (f64::from(height) / 40.0).clamp(9.0, 15.0)
 }
@@ -235,6 +240,17 @@ pub(crate) fn draw_frame_view(
         draw_heatmap(canvas, &place, heat, options, low, high);
         range = Some((low, high, title));
     }
+    // The truth contour goes over the boxes: an anomalous vehicle's tight box runs along its
+    // silhouette, and the box outline would otherwise hide the contour exactly where it matters.
+    if options.boxes {
+        draw_boxes(
+            canvas,
+            &place,
+            input.objects,
+            options.colormap,
+            &options.box_scale,
+        );
+    }
     if options.mask
         && let Some(mask) = input.anomaly_mask
     {
@@ -243,15 +259,12 @@ pub(crate) fn draw_frame_view(
             sy: place.h as f32 / mask.height().max(1) as f32,
             ..place
         };
-        draw_mask_contour(canvas, &mask_place, mask, MASK_COLOR);
-    }
-    if options.boxes {
-        draw_boxes(
+        draw_mask_contour(
             canvas,
-            &place,
-            input.objects,
-            options.colormap,
-            &options.box_scale,
+            &mask_place,
+            mask,
+            MASK_COLOR,
+            contour_thickness(place.w),
         );
     }
     if let (Some((low, high, title)), true) = (range, bar_w > 0) {

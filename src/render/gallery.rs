@@ -108,7 +108,8 @@ fn draw_gallery(
     } else {
         format!("per object (#track · object score): {}", titles.join(" | "))
     };
-    canvas.text(x + 4, y, &header, font, LEGEND_TEXT, Anchor::TopLeft);
+    let (header, size) = Canvas::fitted(&header, font, w.saturating_sub(8));
+    canvas.text(x + 4, y, &header, size, LEGEND_TEXT, Anchor::TopLeft);
     let (y, h) = (y + line as i32, h.saturating_sub(line));
     let per = titles.len().max(1) as u32;
     let gap = 4u32;

@@ -17,6 +17,7 @@
 //! score cache; [`scores_csv`] writes an export's score table with its [`Provenance`].
 
 mod canvas;
+mod chart_backend;
 pub mod charts;
 pub mod colormap;
 mod comparison;
@@ -31,6 +32,7 @@ pub mod overlay;
 mod patches;
 pub mod pred_view;
 pub mod scene;
+mod text;
 pub mod timeline;
 
 pub use charts::{ScoreLabels, histogram, roc_chart};

@@ -194,12 +194,14 @@ pub(crate) fn draw_boxes(
     }
 }
 
-/// Draws the outline of the non-zero region of `mask` (frame pixels) in `color`.
+/// Draws the outline of the non-zero region of `mask` (frame pixels) in `color`, `thickness`
+/// display pixels wide on the inside of the region.
 pub(crate) fn draw_mask_contour(
     canvas: &mut Canvas,
     place: &Placement,
     mask: &GrayImage,
     color: [u8; 3],
+    thickness: u32,
 ) {
     let (mw, mh) = mask.dimensions();
     if mw == 0 || mh == 0 {
@@ -212,6 +214,7 @@ pub(crate) fn draw_mask_contour(
             && y < i64::from(mh)
             && mask.get_pixel(x as u32, y as u32)[0] > 0
     };
+    let reach = thickness.max(1) as f32;
     for cy in 0..place.h as i64 {
         for cx in 0..place.w as i64 {
             let mx = ((cx as f32 + 0.5) / place.sx) as i64;
@@ -219,10 +222,10 @@ pub(crate) fn draw_mask_contour(
             if !inside(mx, my) {
                 continue;
             }
-            let step_x = ((cx as f32 + 1.5) / place.sx) as i64;
-            let step_y = ((cy as f32 + 1.5) / place.sy) as i64;
-            let back_x = ((cx as f32 - 0.5) / place.sx).floor() as i64;
-            let back_y = ((cy as f32 - 0.5) / place.sy).floor() as i64;
+            let step_x = ((cx as f32 + 0.5 + reach) / place.sx).floor() as i64;
+            let step_y = ((cy as f32 + 0.5 + reach) / place.sy).floor() as i64;
+            let back_x = ((cx as f32 + 0.5 - reach) / place.sx).floor() as i64;
+            let back_y = ((cy as f32 + 0.5 - reach) / place.sy).floor() as i64;
             let edge = !inside(step_x, my)
                 || !inside(back_x, my)
                 || !inside(mx, step_y)

@@ -10,7 +10,8 @@ use std::ops::Range;
 use image::RgbaImage;
 use plotters::prelude::*;
 
-use super::canvas::{Anchor, Canvas, FAMILY, render_view};
+use super::canvas::{Anchor, Canvas, render_view};
+use super::chart_backend::FAMILY;
 use super::legend::{LEGEND_TEXT, short_number};
 
 /// The series of one timeline, one value per frame index; slices may be empty (not drawn).
@@ -127,7 +128,10 @@ impl TimelineLayout {
             Some(r) if r.start < r.end && r.start < frames => r.start..r.end.min(frames),
             _ => 0..frames,
         };
-        let left = (w / 8).clamp(0, 64);
+        // Room for the rotated axis title, a tick label like "40.0" and the tick gap, but
+        // never more than a third of a narrow timeline.
+        let needed = font.ceil() as i32 + Canvas::text_size("00.00", font).0 as i32 + 10;
+        let left = needed.max((w / 8).min(64)).min(w / 3);
         let right = (w / 50).clamp(0, 12);
         let legend = line;
         let axis = line + 2;
@@ -574,20 +578,19 @@ pub(crate) fn draw_timeline(
             true,
         );
     }
+    let mut threshold_label = None;
     if let Some(t) = input.threshold.filter(|t| t.is_finite()) {
         let y = row_of(t, &layout.score_y, score_range);
         dashed(canvas, &layout, y, THRESHOLD);
         let text = format!("threshold {}", short_number(t));
         let (tw, th) = Canvas::text_size(&text, layout.font);
         let pad = (layout.font / 5.0).ceil() as i32;
-        canvas.label(
+        let (lx, ly) = (
             layout.plot_x.end - tw as i32 - 2 * pad - 2,
             (y - th as i32 - 2 * pad - 2).max(layout.score_y.start),
-            &text,
-            layout.font,
-            THRESHOLD,
-            [20, 20, 20],
         );
+        canvas.label(lx, ly, &text, layout.font, THRESHOLD, [20, 20, 20]);
+        threshold_label = Some((lx, ly, tw as i32 + 2 * pad, th as i32 + 2 * pad));
     }
     if has_components {
         draw_series(
@@ -633,15 +636,30 @@ pub(crate) fn draw_timeline(
         let x = layout.x_of(cursor).floor() as i32;
         canvas.line(x, layout.score_y.start, x, layout.labels_y.end, CURSOR);
         let text = format!("frame {cursor}");
-        let (tw, _) = Canvas::text_size(&text, layout.font);
-        let tx = (x + 3).min(layout.plot_x.end - tw as i32 - 2);
-        canvas.label(
-            tx,
-            layout.score_y.start + 2,
-            &text,
-            layout.font,
-            CURSOR,
-            [20, 20, 20],
-        );
+        let (tw, th) = Canvas::text_size(&text, layout.font);
+        let pad = (layout.font / 5.0).ceil() as i32;
+        let (lw, lh) = (tw as i32 + 2 * pad, th as i32 + 2 * pad);
+        let top = layout.score_y.start + 2;
+        // Right of the cursor, else left of it, else at the foot of the score band: the
+        // first place that keeps clear of the threshold's label.
+        let candidates = [
+            ((x + 3).min(layout.plot_x.end - lw - 2), top),
+            ((x - lw - 3).max(layout.plot_x.start), top),
+            (
+                (x + 3).min(layout.plot_x.end - lw - 2),
+                (layout.score_y.end - lh - 2).max(top),
+            ),
+        ];
+        let clear = |&(cx, cy): &(i32, i32)| {
+            threshold_label.is_none_or(|(lx, ly, w, h)| {
+                cx + lw <= lx || lx + w <= cx || cy + lh <= ly || ly + h <= cy
+            })
+        };
+        let (tx, ty) = candidates
+            .iter()
+            .copied()
+            .find(clear)
+            .unwrap_or(candidates[0]);
+        canvas.label(tx, ty, &text, layout.font, CURSOR, [20, 20, 20]);
     }
 }
