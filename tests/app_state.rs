@@ -9,7 +9,8 @@ use app_common::{
     ANOMALY, FRAMES, generate_dataset, scored_state, setup, state_of_tables, table, tiny_checkpoint,
 };
 use vadscope::app::{
-    Action, AppState, FailureKind, LogLevel, Playback, ScoreStatus, ThresholdMode, ViewSettings,
+    Action, AppState, BACKGROUND_FRAME_CACHE, CURRENT_FRAME_CACHE, FailureKind, LogLevel, Playback,
+    ScoreStatus, ThresholdMode, ViewSettings,
 };
 use vadscope::score::{FusionWeights, ModelKey, ScoreRequest};
 use vadscope::sequence::Scenario;
@@ -437,4 +438,48 @@ fn cancelling_leaves_no_scenario_half_scored() {
             .iter()
             .all(|e| matches!(e.status, ScoreStatus::Ready(_)))
     );
+}
+
+#[test]
+fn only_the_scenario_on_screen_keeps_a_large_frame_cache() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = tiny_checkpoint(dir.path());
+    let mut state = AppState::new(setup(&model), ViewSettings::default());
+    assert!(state.open(&generate_dataset(dir.path())));
+    state.wait_for_scoring();
+    let budgets = |state: &AppState| -> Vec<usize> {
+        let dataset = state.dataset().expect("dataset");
+        dataset
+            .scenarios
+            .iter()
+            .map(|e| e.scenario.as_ref().expect("opened").cache_budget())
+            .collect()
+    };
+    assert_eq!(
+        budgets(&state),
+        [CURRENT_FRAME_CACHE, BACKGROUND_FRAME_CACHE]
+    );
+    // Scrubbing the first scenario fills its cache; switching shrinks it at once.
+    for _ in 0..8 {
+        state.apply(Action::Step(1));
+        let scenario = state.dataset().expect("dataset").scenarios[0]
+            .scenario
+            .as_ref()
+            .expect("opened");
+        scenario.rgb(state.frame()).expect("frame");
+    }
+    let first = |state: &AppState| -> usize {
+        state.dataset().expect("dataset").scenarios[0]
+            .scenario
+            .as_ref()
+            .expect("opened")
+            .cache_bytes()
+    };
+    assert!(first(&state) > 0, "the frames on screen are cached");
+    state.apply(Action::SelectScenario(1));
+    assert_eq!(
+        budgets(&state),
+        [BACKGROUND_FRAME_CACHE, CURRENT_FRAME_CACHE]
+    );
+    assert!(first(&state) <= BACKGROUND_FRAME_CACHE);
 }

@@ -40,7 +40,10 @@ pub use labeling::{Labeling, ScenarioLabels};
 pub use layout::Layout;
 pub use playback::Playback;
 pub use settings::{Overlay, Overlays, Reference, ThresholdMode, ViewMode, ViewSettings};
-pub use state::{Action, AppState, FrameInfo, LogEntry, LogLevel, ObjectInfo};
+pub use state::{
+    Action, AppState, BACKGROUND_FRAME_CACHE, CURRENT_FRAME_CACHE, FrameInfo, LogEntry, LogLevel,
+    ObjectInfo,
+};
 pub use ui::ViewerApp;
 
 /// What the viewer opens with.

@@ -125,6 +125,15 @@ pub struct LogEntry {
 /// Log entries kept (older ones are dropped).
 const LOG_CAPACITY: usize = 500;
 
+/// Decoded-frame cache of the scenario on screen: about 200 frames of 768×512, so scrubbing
+/// back and forth near the cursor decodes nothing twice.
+pub const CURRENT_FRAME_CACHE: usize = 256 << 20;
+
+/// Decoded-frame cache of every other scenario of the data set: enough for the failure
+/// panel's thumbnails to be drawn without decoding on every repaint, small enough that a
+/// data set of hundreds of scenarios stays within a few GiB at worst.
+pub const BACKGROUND_FRAME_CACHE: usize = 8 << 20;
+
 /// One object of the current frame as the inspector shows it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ObjectInfo {
@@ -776,6 +785,17 @@ impl AppState {
             .and_then(|e| e.scenario.as_ref())
             .map_or(10.0, |s| f64::from(s.meta().fps));
         let keep_frame = index == self.current && self.playback.len() == frames;
+        // One budget for the scenario on screen, a small one for the rest: memory stays
+        // bounded by the data set's size, not by how many scenarios were visited.
+        for (i, entry) in dataset.scenarios.iter().enumerate() {
+            if let Some(scenario) = &entry.scenario {
+                scenario.set_cache_budget(if i == index {
+                    CURRENT_FRAME_CACHE
+                } else {
+                    BACKGROUND_FRAME_CACHE
+                });
+            }
+        }
         self.current = index;
         if !keep_frame {
             self.playback = Playback::new(frames, fps);
