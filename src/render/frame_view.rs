@@ -251,9 +251,11 @@ pub(crate) fn draw_frame_view(
             &options.box_scale,
         );
     }
+    let mut contour_drawn = false;
     if options.mask
         && let Some(mask) = input.anomaly_mask
     {
+        contour_drawn = mask.as_raw().iter().any(|&v| v > 0);
         let mask_place = Placement {
             sx: place.w as f32 / mask.width().max(1) as f32,
             sy: place.h as f32 / mask.height().max(1) as f32,
@@ -298,7 +300,41 @@ pub(crate) fn draw_frame_view(
             color,
             Anchor::TopLeft,
         );
+        if contour_drawn {
+            let _ = contour_key(canvas, (x, w), y + 4, text_width(&first, size), size)
+                || contour_key(canvas, (x, w), y + 4 + line + 2, text_width(&second, size), size);
+        }
     }
+}
+
+/// Width of `text` at `size` pixels.
+fn text_width(text: &str, size: f64) -> u32 {
+    Canvas::text_size(text, size).0
+}
+
+/// The key to the truth contour at the right end of a caption line starting at row `top`
+/// whose text is `used` pixels wide, when it fits there: an outlined swatch and its meaning,
+/// in the contour's colour. Whether it was drawn.
+fn contour_key(canvas: &mut Canvas, (x, w): (i32, u32), top: i32, used: u32, size: f64) -> bool {
+    const KEY: &str = "ground-truth anomaly mask";
+    let (tw, th) = Canvas::text_size(KEY, size);
+    let swatch = th as i32 * 2 / 3;
+    let width = swatch + 6 + tw as i32;
+    let left = x + w as i32 - 8 - width;
+    if left < x + 6 + used as i32 + 16 {
+        return false;
+    }
+    let swatch_top = top + (th as i32 - swatch) / 2 + 1;
+    canvas.outline_rect(
+        left,
+        swatch_top,
+        left + swatch,
+        swatch_top + swatch,
+        MASK_COLOR,
+        2,
+    );
+    canvas.text(left + swatch + 6, top, KEY, size, MASK_COLOR, Anchor::TopLeft);
+    true
 }
 
 /// The range the heatmap's colours span, and the colour bar's title.
