@@ -8,7 +8,13 @@
 //!   failure cases, and redrawing timeline, ROC chart and panels — target ≤ 16 ms; and the
 //!   re-fusion alone through the GUI-free core;
 //! * startup to the first frame: opening `sample_sequences/` (cached scores), building the
-//!   window's first frame with the main view drawn — target ≤ 2 s.
+//!   window's first frame with the main view drawn — target ≤ 2 s;
+//! * scrubbing a 10,000-frame scenario (a generated 160×96 clip repeated, scored with stored
+//!   flow): one
+//!   seek to a random, mostly undecoded frame and its redraw; then every frame in order,
+//!   with the process's resident memory printed before, during and after (the target: it
+//!   stays bounded, i.e. levels off instead of growing with the frames visited).
+//!   `VADSCOPE_SCRUB_FRAMES` changes the length.
 //!
 //! The sample scenario is copied to a temporary folder and scored once with a tiny random
 //! model (flow by DIS, as the samples ship without flow), so the bench needs no bundled
@@ -24,8 +30,11 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use egui::Key;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use vadscope::app::{AppState, Layout, ScoringSetup, ViewSettings, ViewerApp};
+use vadscope::app::{Action, AppState, Layout, ScoringSetup, ViewSettings, ViewerApp};
 use vadscope::score::{BoxSource, FlowSource, ScoreRequest};
+use rayon::prelude::*;
+use vadscope::sequence::{Domain, FrameId, ScenarioWriter, Weather};
+use vadscope::synth::{Scenario, ScenarioKind, ScenarioSpec};
 
 /// Copies the braking sample scenario into `dir` and returns the data-set root.
 fn sample_copy(dir: &Path) -> PathBuf {
@@ -131,5 +140,89 @@ fn bench_app(c: &mut Criterion) {
     startup.finish();
 }
 
-criterion_group!(benches, bench_app);
+/// Resident and peak resident memory of this process in MiB, from `/proc/self/status`
+/// (`None` off Linux).
+fn resident_mib() -> Option<(f64, f64)> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let field = |name: &str| {
+        status
+            .lines()
+            .find_map(|line| line.strip_prefix(name))
+            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
+            .map(|kib| kib / 1024.0)
+    };
+    Some((field("VmRSS:")?, field("VmHWM:")?))
+}
+
+fn report_memory(when: &str) {
+    if let Some((rss, peak)) = resident_mib() {
+        eprintln!("memory {when}: resident {rss:.0} MiB, peak {peak:.0} MiB");
+    }
+}
+
+/// Writes a `frames`-frame scenario to `dir`: a generated 100-frame sudden braking (160×96,
+/// RGB, semantic, flow, boxes, labels) played over and over under consecutive frame ids. The
+/// generator simulates the traffic of the whole route up front, which for 10,000 frames
+/// costs minutes; repeating a clip gives the viewer the same work per frame.
+fn write_long_scenario(dir: &Path, frames: usize) {
+    let mut spec = ScenarioSpec::new(ScenarioKind::Braking, Domain::City, Weather::Sun, 11);
+    spec.frames = 100;
+    spec.width = 160;
+    spec.height = 96;
+    let scenario = Scenario::build(&spec).expect("build");
+    let clip = std::sync::Mutex::new(Vec::new());
+    scenario
+        .render_all(|mut record| {
+            record.depth_m = None;
+            record.instance = None;
+            clip.lock().expect("clip").push(record);
+            Ok::<(), ()>(())
+        })
+        .expect("render");
+    let mut clip = clip.into_inner().expect("clip");
+    clip.sort_by_key(|r| r.id);
+    let writer = ScenarioWriter::create(dir, &scenario.meta()).expect("writer");
+    (0..frames).into_par_iter().for_each(|k| {
+        let mut record = clip[k % clip.len()].clone();
+        record.id = FrameId(k as u64);
+        writer.write_frame(&record).expect("write frame");
+    });
+    writer.finish().expect("finish");
+}
+
+fn bench_long_scrub(c: &mut Criterion) {
+    let frames: u32 = std::env::var("VADSCOPE_SCRUB_FRAMES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(10_000);
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = app_common::tiny_checkpoint(dir.path());
+    let root = dir.path().join("long");
+    write_long_scenario(&root.join("Scenario_long_braking"), frames as usize);
+    let state = app_common::scored_state(&root, &model);
+    let mut h = harness_of(ViewerApp::with_state(state, Layout::default()));
+    report_memory(&format!("after opening and scoring {frames} frames"));
+
+    let mut next = 0x2545_f491_u64;
+    let name = format!("seek to a random frame, {frames}-frame scenario (GUI)");
+    c.bench_function(&name, |b| {
+        b.iter(|| {
+            next = next.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            let frame = (next >> 33) as usize % frames as usize;
+            h.state_mut().state_mut().apply(Action::Seek(frame));
+            h.run();
+            black_box(h.state().state().frame())
+        });
+    });
+    report_memory("after the random seeks");
+    for frame in 0..frames as usize {
+        h.state_mut().state_mut().apply(Action::Seek(frame));
+        h.run();
+        if (frame + 1) % (frames as usize / 4).max(1) == 0 {
+            report_memory(&format!("after scrubbing to frame {}", frame + 1));
+        }
+    }
+}
+
+criterion_group!(benches, bench_app, bench_long_scrub);
 criterion_main!(benches);
