@@ -30,9 +30,9 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use egui::Key;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
+use rayon::prelude::*;
 use vadscope::app::{Action, AppState, Layout, ScoringSetup, ViewSettings, ViewerApp};
 use vadscope::score::{BoxSource, FlowSource, ScoreRequest};
-use rayon::prelude::*;
 use vadscope::sequence::{Domain, FrameId, ScenarioWriter, Weather};
 use vadscope::synth::{Scenario, ScenarioKind, ScenarioSpec};
 

@@ -407,18 +407,7 @@ impl Canvas {
         let Some(raster) = rasterized(text, size) else {
             return;
         };
-        let (w, h) = (raster.width as i32, raster.height as i32);
-        let pos = anchor.pos();
-        let dx = match pos.h_pos {
-            HPos::Left => 0,
-            HPos::Center => -w / 2,
-            HPos::Right => -w,
-        };
-        let dy = match pos.v_pos {
-            VPos::Top => 0,
-            VPos::Center => -h / 2,
-            VPos::Bottom => -h,
-        };
+        let (dx, dy) = raster.anchor_offset(anchor.pos());
         for &(px, py, alpha) in &raster.coverage {
             self.blend(x + dx + px, y + dy + py, color, alpha);
         }

@@ -4,7 +4,6 @@
 //! truncates each glyph's offsets (points float above the baseline, bearings are lost).
 
 use plotters::backend::{BitMapBackend, DrawingBackend};
-use plotters_backend::text_anchor::{HPos, VPos};
 use plotters_backend::{
     BackendColor, BackendCoord, BackendStyle, BackendTextStyle, DrawingErrorKind,
 };
@@ -89,18 +88,7 @@ impl<'a> DrawingBackend for ChartBackend<'a> {
         let Some(raster) = rasterized(text, style.size()) else {
             return Ok(());
         };
-        let (w, h) = (raster.width as i32, raster.height as i32);
-        let anchor = style.anchor();
-        let dx = match anchor.h_pos {
-            HPos::Left => 0,
-            HPos::Center => -w / 2,
-            HPos::Right => -w,
-        };
-        let dy = match anchor.v_pos {
-            VPos::Top => 0,
-            VPos::Center => -h / 2,
-            VPos::Bottom => -h,
-        };
+        let (dx, dy) = raster.anchor_offset(style.anchor());
         let transform = style.transform();
         let (width, height) = self.get_size();
         for &(px, py, coverage) in &raster.coverage {

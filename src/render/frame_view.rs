@@ -302,7 +302,13 @@ pub(crate) fn draw_frame_view(
         );
         if contour_drawn {
             let _ = contour_key(canvas, (x, w), y + 4, text_width(&first, size), size)
-                || contour_key(canvas, (x, w), y + 4 + line + 2, text_width(&second, size), size);
+                || contour_key(
+                    canvas,
+                    (x, w),
+                    y + 4 + line + 2,
+                    text_width(&second, size),
+                    size,
+                );
         }
     }
 }
@@ -333,7 +339,14 @@ fn contour_key(canvas: &mut Canvas, (x, w): (i32, u32), top: i32, used: u32, siz
         MASK_COLOR,
         2,
     );
-    canvas.text(left + swatch + 6, top, KEY, size, MASK_COLOR, Anchor::TopLeft);
+    canvas.text(
+        left + swatch + 6,
+        top,
+        KEY,
+        size,
+        MASK_COLOR,
+        Anchor::TopLeft,
+    );
     true
 }
 

@@ -10,6 +10,7 @@ use std::rc::Rc;
 use std::sync::OnceLock;
 
 use ab_glyph::{Font, FontRef, PxScale, ScaleFont, point};
+use plotters_backend::text_anchor::{HPos, Pos, VPos};
 
 /// The font every view writes with.
 const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
@@ -33,6 +34,24 @@ pub(crate) struct RasterText {
     pub(crate) height: u32,
     /// (x, y, coverage in (0, 1]) of every touched pixel.
     pub(crate) coverage: Vec<(i32, i32, f32)>,
+}
+
+impl RasterText {
+    /// Where the box's top-left corner lies relative to the anchor point `pos` names.
+    pub(crate) fn anchor_offset(&self, pos: Pos) -> (i32, i32) {
+        let (w, h) = (self.width as i32, self.height as i32);
+        let dx = match pos.h_pos {
+            HPos::Left => 0,
+            HPos::Center => -w / 2,
+            HPos::Right => -w,
+        };
+        let dy = match pos.v_pos {
+            VPos::Top => 0,
+            VPos::Center => -h / 2,
+            VPos::Bottom => -h,
+        };
+        (dx, dy)
+    }
 }
 
 /// Texts rasterised at most before the cache starts afresh (views draw a few hundred).
