@@ -747,6 +747,9 @@ struct Snapshot<'a> {
     poses: Vec<Pose>,
     /// Indices of main-road vehicles (not on a cross street) sorted by s.
     by_s: Vec<usize>,
+    /// Indices of the vehicles on a cross street, ascending: a crossing vehicle's leader is
+    /// one of them, and scanning all vehicles instead made long scenarios quadratic.
+    crossing: Vec<usize>,
 }
 
 impl<'a> Snapshot<'a> {
@@ -760,10 +763,14 @@ impl<'a> Snapshot<'a> {
             .filter(|&i| poses[i].cross_lane.is_none())
             .collect();
         by_s.sort_by(|&a, &b| poses[a].s.total_cmp(&poses[b].s).then(a.cmp(&b)));
+        let crossing = (0..vehicles.len())
+            .filter(|&i| poses[i].cross_lane.is_some())
+            .collect();
         Self {
             vehicles,
             poses,
             by_s,
+            crossing,
         }
     }
 
@@ -781,7 +788,8 @@ impl<'a> Snapshot<'a> {
         };
         if let Some((line, positive)) = p.cross_lane {
             let sign = if positive { 1.0 } else { -1.0 };
-            for (j, q) in self.poses.iter().enumerate() {
+            for &j in &self.crossing {
+                let q = &self.poses[j];
                 if j == i {
                     continue;
                 }
