@@ -107,15 +107,15 @@ pub fn cast(view: &FrameView, with_shading: bool) -> (GBuffer, Option<Shading>) 
     let gbuf = GBuffer {
         width: w,
         height: h,
-        key: px.iter().map(|p| p.key).collect(),
-        depth: px.iter().map(|p| p.depth).collect(),
-        point: px.iter().map(|p| p.point).collect(),
+        key: px.par_iter().map(|p| p.key).collect(),
+        depth: px.par_iter().map(|p| p.depth).collect(),
+        point: px.par_iter().map(|p| p.point).collect(),
     };
     let shading = with_shading.then(|| Shading {
-        hdr: px.iter().map(|p| p.rgb).collect(),
-        semantic: px.iter().map(|p| p.semantic).collect(),
-        tag: px.iter().map(|p| p.tag).collect(),
-        id: px.iter().map(|p| p.id).collect(),
+        hdr: px.par_iter().map(|p| p.rgb).collect(),
+        semantic: px.par_iter().map(|p| p.semantic).collect(),
+        tag: px.par_iter().map(|p| p.tag).collect(),
+        id: px.par_iter().map(|p| p.id).collect(),
     });
     (gbuf, shading)
 }
@@ -131,8 +131,11 @@ fn antialias_edges(view: &FrameView, px: &mut [Px]) {
     let w = view.cam.width as usize;
     let h = view.cam.height_px as usize;
     // Parts count as separate surfaces so that kerb faces and vehicle parts are smoothed too.
-    let keys: Vec<u32> = px.iter().map(|p| p.key ^ ((p.part as u32) << 24)).collect();
-    let lum: Vec<f32> = px.iter().map(|p| p.rgb.luminance()).collect();
+    let keys: Vec<u32> = px
+        .par_iter()
+        .map(|p| p.key ^ ((p.part as u32) << 24))
+        .collect();
+    let lum: Vec<f32> = px.par_iter().map(|p| p.rgb.luminance()).collect();
     let cam = &view.cam;
     px.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         for (x, out) in row.iter_mut().enumerate() {
@@ -176,15 +179,20 @@ pub fn render_record(
     let w = gbuf.width as u32;
     let h = gbuf.height as u32;
     let rgb = post::finish(world, &view, &gbuf, shading.hdr);
-    let semantic = image::GrayImage::from_raw(w, h, shading.semantic.clone())
+    let semantic = image::GrayImage::from_raw(w, h, shading.semantic)
         .unwrap_or_else(|| image::GrayImage::new(w, h));
-    let mut inst = Vec::with_capacity((w * h * 3) as usize);
-    for (t, id) in shading.tag.iter().zip(&shading.id) {
-        inst.extend_from_slice(&[*t, (*id & 0xff) as u8, (*id >> 8) as u8]);
-    }
+    let mut inst = vec![0u8; shading.tag.len() * 3];
+    inst.par_chunks_mut(3 * w as usize)
+        .zip(shading.tag.par_chunks(w as usize))
+        .zip(shading.id.par_chunks(w as usize))
+        .for_each(|((out, tags), ids)| {
+            for ((px, &t), &id) in out.chunks_exact_mut(3).zip(tags).zip(ids) {
+                px.copy_from_slice(&[t, (id & 0xff) as u8, (id >> 8) as u8]);
+            }
+        });
     let instance =
         image::RgbImage::from_raw(w, h, inst).unwrap_or_else(|| image::RgbImage::new(w, h));
-    let depth_m: Vec<f32> = gbuf.depth.iter().map(|d| d.min(FAR_DEPTH_M)).collect();
+    let depth_m: Vec<f32> = gbuf.depth.par_iter().map(|d| d.min(FAR_DEPTH_M)).collect();
     let flow = match prev {
         Some(p) => flow::exact_flow(world, p, &view, &gbuf),
         None => crate::sequence::FlowField::zeros(w, h),

@@ -3,6 +3,8 @@
 
 use std::sync::OnceLock;
 
+use rayon::prelude::*;
+
 use super::frame::GBuffer;
 use super::math::Rgb;
 use super::render::FrameView;
@@ -148,14 +150,20 @@ pub fn finish(
     let lut = srgb_lut();
     let exposure = world.lighting.exposure;
     let desat = world.lighting.desaturate;
-    let mut bytes = Vec::with_capacity(w * h * 3);
-    for c in &hdr {
-        let c = (*c * exposure).desaturate(desat);
-        for v in [c.r, c.g, c.b] {
-            let m = aces(v.max(0.0));
-            bytes.push(lut[(m * 4095.0) as usize]);
-        }
-    }
+    let mut bytes = vec![0u8; w * h * 3];
+    // Rows in parallel, so that the other cores are not idle here when they have no
+    // frames of their own left to render.
+    bytes
+        .par_chunks_mut(3 * w)
+        .zip(hdr.par_chunks(w))
+        .for_each(|(out, row)| {
+            for (px, c) in out.chunks_exact_mut(3).zip(row) {
+                let c = (*c * exposure).desaturate(desat);
+                for (byte, v) in px.iter_mut().zip([c.r, c.g, c.b]) {
+                    *byte = lut[(aces(v.max(0.0)) * 4095.0) as usize];
+                }
+            }
+        });
     image::RgbImage::from_raw(w as u32, h as u32, bytes)
         .unwrap_or_else(|| image::RgbImage::new(w as u32, h as u32))
 }

@@ -482,10 +482,12 @@ impl Road {
             }
             // Zebra crossings on both sides of the cross street.
             if ads < hw + 1.0 + CROSSWALK + 1.0 {
-                let z = filtered_band(ads, hw + 1.0, hw + 1.0 + CROSSWALK, fs)
-                    * filtered_pulse(d + 0.25, 1.0, 0.5, fd)
-                    * filtered_band(ad, 0.0, lanes_edge, fd);
-                m.white += z;
+                let across = filtered_band(ads, hw + 1.0, hw + 1.0 + CROSSWALK, fs);
+                if across > 0.0 {
+                    m.white += across
+                        * filtered_pulse(d + 0.25, 1.0, 0.5, fd)
+                        * filtered_band(ad, 0.0, lanes_edge, fd);
+                }
             }
             // Stop lines: before the crossing for traffic approaching on each side.
             let stop_at = hw + 1.0 + CROSSWALK + 0.6;
@@ -501,25 +503,35 @@ impl Road {
             // Dashed lane dividers.
             for k in 1..self.lanes {
                 let c = self.inner + self.lane_width * k as f32;
-                m.white += filtered_band(ad, c - 0.06, c + 0.06, fd)
-                    * filtered_pulse(s + self.dash_phase, 9.0, 3.0, fs);
+                let line = filtered_band(ad, c - 0.06, c + 0.06, fd);
+                if line > 0.0 {
+                    m.white += line * filtered_pulse(s + self.dash_phase, 9.0, 3.0, fs);
+                }
             }
             // Solid edge line between the outer lane and the parking strip.
             m.white += filtered_band(ad, lanes_edge - 0.16, lanes_edge, fd);
             // Parking bay ticks.
-            m.white += filtered_band(ad, lanes_edge, lanes_edge + 0.5, fd)
-                * filtered_pulse(s + 0.5 * self.dash_phase, 6.0, 0.12, fs);
+            let ticks = filtered_band(ad, lanes_edge, lanes_edge + 0.5, fd);
+            if ticks > 0.0 {
+                m.white += ticks * filtered_pulse(s + 0.5 * self.dash_phase, 6.0, 0.12, fs);
+            }
         } else if ds.abs() < hw {
             // On the cross street: crossings where the sidewalks continue, and a dashed
             // centre line beyond them.
             let inner_edge = self.road_half + 0.8;
-            m.white += filtered_band(ad, inner_edge, inner_edge + CROSSWALK, fd)
-                * filtered_pulse(s + 0.25, 1.0, 0.5, fs)
-                * filtered_band(ds, -hw + 0.3, hw - 0.3, fs);
+            let crossing = filtered_band(ad, inner_edge, inner_edge + CROSSWALK, fd);
+            if crossing > 0.0 {
+                m.white += crossing
+                    * filtered_pulse(s + 0.25, 1.0, 0.5, fs)
+                    * filtered_band(ds, -hw + 0.3, hw - 0.3, fs);
+            }
             let beyond = inner_edge + CROSSWALK + 1.0;
-            m.white += filtered_band(ds, -0.06, 0.06, fs)
-                * filtered_pulse(ad - beyond, 6.0, 2.0, fd)
-                * filtered_band(ad, beyond, 1.0e6, fd);
+            let centre = filtered_band(ds, -0.06, 0.06, fs);
+            if centre > 0.0 {
+                m.white += centre
+                    * filtered_pulse(ad - beyond, 6.0, 2.0, fd)
+                    * filtered_band(ad, beyond, 1.0e6, fd);
+            }
         }
         m.white = m.white.min(1.0);
         m.yellow = m.yellow.min(1.0);
@@ -534,8 +546,10 @@ impl Road {
         m.white += filtered_band(ad, edge - 0.2, edge, fd);
         for k in 1..self.lanes {
             let c = self.inner + self.lane_width * k as f32;
-            m.white += filtered_band(ad, c - 0.075, c + 0.075, fd)
-                * filtered_pulse(s + self.dash_phase, 18.0, 6.0, fs);
+            let line = filtered_band(ad, c - 0.075, c + 0.075, fd);
+            if line > 0.0 {
+                m.white += line * filtered_pulse(s + self.dash_phase, 18.0, 6.0, fs);
+            }
         }
         m.white = m.white.min(1.0);
         m

@@ -227,9 +227,11 @@ impl Scenario {
     ) -> Result<(), E> {
         let n = self.frame_count();
         // One chunk per thread keeps the extra geometry pass at each chunk start rare; rows
-        // are parallel inside a frame as well, so threads stay busy at the end.
-        let chunks = rayon::current_num_threads().max(1);
-        let size = n.div_ceil(chunks).max(16);
+        // are parallel inside a frame as well. Equal lengths (at least `MIN_CHUNK`), because
+        // a thread whose chunk ends early can only help with the others' parallel rows,
+        // not with their per-frame serial steps.
+        let chunks = rayon::current_num_threads().min(n / MIN_CHUNK).max(1);
+        let size = n.div_ceil(chunks).max(1);
         let ranges: Vec<Range<usize>> =
             (0..n).step_by(size).map(|a| a..(a + size).min(n)).collect();
         ranges.into_par_iter().try_for_each(|r| {
@@ -244,6 +246,10 @@ impl Scenario {
         })
     }
 }
+
+/// Fewest frames [`Scenario::render_all`] gives one chunk (each chunk starts with an extra
+/// geometry pass for its first frame's flow).
+const MIN_CHUNK: usize = 8;
 
 /// Generates `spec` into `out_dir/Scenario_<name>/` (benchmark layout with every modality,
 /// boxes, frame labels and `scenario.json`) and returns the folder. `on_frame` is called with

@@ -546,16 +546,30 @@ fn static_surface(view: &FrameView, index: usize, hit: &Hit, fu: f32, fw: f32) -
             let ground_floor = 4.2;
             // Upper-floor windows.
             let win_w = bay * window;
-            let glass_u = filtered_pulse(u - 0.5 * (bay - win_w), bay, win_w, fu);
             let sill = 0.95;
             let win_h = floor_h * 0.47;
-            let glass_v = filtered_pulse(v - ground_floor - sill, floor_h, win_h, fw)
-                * filtered_band(v, ground_floor, z1 - 1.2, fw);
-            let frame_u = filtered_pulse(u - 0.5 * (bay - win_w) + 0.1, bay, win_w + 0.2, fu);
-            let frame_v = filtered_pulse(v - ground_floor - sill + 0.1, floor_h, win_h + 0.2, fw)
-                * filtered_band(v, ground_floor, z1 - 1.2, fw);
-            let glass = glass_u * glass_v;
-            let frame = (frame_u * frame_v - glass).max(0.0);
+            // The costly pulses of a coverage product are skipped where another factor is
+            // zero: the product is then exactly zero anyway.
+            let upper = filtered_band(v, ground_floor, z1 - 1.2, fw);
+            let (glass, frame) = if upper > 0.0 {
+                let glass_u = filtered_pulse(u - 0.5 * (bay - win_w), bay, win_w, fu);
+                let glass = if glass_u > 0.0 {
+                    glass_u * (filtered_pulse(v - ground_floor - sill, floor_h, win_h, fw) * upper)
+                } else {
+                    0.0
+                };
+                let frame_u = filtered_pulse(u - 0.5 * (bay - win_w) + 0.1, bay, win_w + 0.2, fu);
+                let frame = if frame_u > 0.0 {
+                    let frame_v =
+                        filtered_pulse(v - ground_floor - sill + 0.1, floor_h, win_h + 0.2, fw);
+                    (frame_u * (frame_v * upper) - glass).max(0.0)
+                } else {
+                    0.0
+                };
+                (glass, frame)
+            } else {
+                (0.0, 0.0)
+            };
             let iu = floor((u - 0.5 * (bay - win_w)) / bay) as i32;
             let iv = floor((v - ground_floor - sill) / floor_h) as i32;
             let wv = unit2(iu, iv, salt ^ 0x5151);
@@ -571,20 +585,33 @@ fn static_surface(view: &FrameView, index: usize, hit: &Hit, fu: f32, fw: f32) -
             }
             // Shop fronts along the street.
             if front {
-                let shop = filtered_pulse(u - 0.4, 2.0 * bay, 2.0 * bay - 0.8, fu)
-                    * filtered_band(v, 0.5, 3.3, fw);
+                let shop_v = filtered_band(v, 0.5, 3.3, fw);
+                let shop = if shop_v > 0.0 {
+                    filtered_pulse(u - 0.4, 2.0 * bay, 2.0 * bay - 0.8, fu) * shop_v
+                } else {
+                    0.0
+                };
                 let sign =
                     filtered_band(v, 3.5, 4.0, fw) * filtered_band(u, 0.5, 2.0 * hx - 0.5, fu);
-                let sign_c = Rgb::new(
-                    0.1 + 0.5 * unit2(palette as i32, 1, salt),
-                    0.1 + 0.4 * unit2(palette as i32, 2, salt),
-                    0.1 + 0.5 * unit2(palette as i32, 3, salt),
-                );
-                albedo = albedo.lerp(sign_c, sign);
+                // Without the sign its colour would add exactly nothing.
+                let sign_c = (sign > 0.0).then(|| {
+                    Rgb::new(
+                        0.1 + 0.5 * unit2(palette as i32, 1, salt),
+                        0.1 + 0.4 * unit2(palette as i32, 2, salt),
+                        0.1 + 0.5 * unit2(palette as i32, 3, salt),
+                    )
+                });
+                if let Some(c) = sign_c {
+                    albedo = albedo.lerp(c, sign);
+                }
                 albedo = albedo.lerp(Rgb::new(0.05, 0.055, 0.06), shop);
                 gloss += 0.5 * shop;
                 if l.night {
-                    emissive += Rgb::new(1.0, 0.85, 0.6) * (0.8 * shop) + sign_c * (1.5 * sign);
+                    let shop_light = Rgb::new(1.0, 0.85, 0.6) * (0.8 * shop);
+                    emissive += match sign_c {
+                        Some(c) => shop_light + c * (1.5 * sign),
+                        None => shop_light,
+                    };
                 }
             }
             // Cornice.
