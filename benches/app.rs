@@ -12,9 +12,11 @@
 //! * scrubbing a 10,000-frame scenario (a generated 160×96 clip repeated, scored with stored
 //!   flow): one
 //!   seek to a random, mostly undecoded frame and its redraw; then every frame in order,
-//!   with the process's resident memory printed before, during and after (the target: it
-//!   stays bounded, i.e. levels off instead of growing with the frames visited).
-//!   `VADSCOPE_SCRUB_FRAMES` changes the length.
+//!   each rendered through the GPU renderer as a window would, with the process's resident
+//!   memory printed before, during and after (the target: it stays bounded, i.e. levels off
+//!   instead of growing with the frames visited).
+//!   `VADSCOPE_SCRUB_FRAMES` changes the length, `VADSCOPE_SCRUB_DATA=DIR` keeps the
+//!   scenario and its scores in DIR for the next run.
 //!
 //! The sample scenario is copied to a temporary folder and scored once with a tiny random
 //! model (flow by DIS, as the samples ship without flow), so the bench needs no bundled
@@ -74,6 +76,10 @@ fn harness_of(app: ViewerApp) -> Harness<'static, ViewerApp> {
         .wgpu()
         .build_ui_state(|ui, app: &mut ViewerApp| app.show(ui), app);
     harness.run();
+    // kittest starts its renderer at the first render and queues every texture upload
+    // until then; rendering once makes uploads reach the GPU textures as in the window
+    // (and keeps the queue from growing by one main-view image per frame).
+    harness.render().expect("render the first frame");
     harness
 }
 
@@ -196,9 +202,19 @@ fn bench_long_scrub(c: &mut Criterion) {
         .and_then(|v| v.parse().ok())
         .unwrap_or(10_000);
     let dir = tempfile::tempdir().expect("tempdir");
-    let model = app_common::tiny_checkpoint(dir.path());
-    let root = dir.path().join("long");
-    write_long_scenario(&root.join("Scenario_long_braking"), frames as usize);
+    // VADSCOPE_SCRUB_DATA keeps the scenario, the model and the score cache between runs
+    // (scoring 10,000 frames with the tiny model takes minutes); written when missing.
+    let root = std::env::var_os("VADSCOPE_SCRUB_DATA")
+        .map_or_else(|| dir.path().join("long"), PathBuf::from);
+    let model = root.join("tiny.safetensors");
+    if !model.exists() {
+        std::fs::create_dir_all(&root).expect("mkdir");
+        std::fs::copy(app_common::tiny_checkpoint(dir.path()), &model).expect("keep model");
+    }
+    let scenario = root.join(format!("Scenario_long_braking_{frames}"));
+    if !scenario.exists() {
+        write_long_scenario(&scenario, frames as usize);
+    }
     let state = app_common::scored_state(&root, &model);
     let mut h = harness_of(ViewerApp::with_state(state, Layout::default()));
     report_memory(&format!("after opening and scoring {frames} frames"));
@@ -214,10 +230,14 @@ fn bench_long_scrub(c: &mut Criterion) {
             black_box(h.state().state().frame())
         });
     });
-    report_memory("after the random seeks");
+    // kittest hands a frame to the GPU only when it renders (a window does every frame), and
+    // wgpu frees replaced textures at submission: render to measure what a window holds.
+    h.render().expect("render");
+    report_memory("after the random seeks (and one render)");
     for frame in 0..frames as usize {
         h.state_mut().state_mut().apply(Action::Seek(frame));
         h.run();
+        h.render().expect("render");
         if (frame + 1) % (frames as usize / 4).max(1) == 0 {
             report_memory(&format!("after scrubbing to frame {}", frame + 1));
         }
