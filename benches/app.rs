@@ -10,13 +10,12 @@
 //! * startup to the first frame: opening `sample_sequences/` (cached scores), building the
 //!   window's first frame with the main view drawn — target ≤ 2 s;
 //! * scrubbing a 10,000-frame scenario (a generated 160×96 clip repeated, scored with stored
-//!   flow): one
-//!   seek to a random, mostly undecoded frame and its redraw; then every frame in order,
-//!   each rendered through the GPU renderer as a window would, with the process's resident
-//!   memory printed before, during and after (the target: it stays bounded, i.e. levels off
-//!   instead of growing with the frames visited).
-//!   `VADSCOPE_SCRUB_FRAMES` changes the length, `VADSCOPE_SCRUB_DATA=DIR` keeps the
-//!   scenario and its scores in DIR for the next run.
+//!   flow): one seek to a random, mostly undecoded frame and its redraw; then every frame
+//!   in order, each rendered through the GPU renderer as a window would, with the process's
+//!   resident memory printed before, during and after (the target: it stays bounded, i.e.
+//!   levels off instead of growing with the frames visited). `VADSCOPE_SCRUB_FRAMES` changes
+//!   the length, `VADSCOPE_SCRUB_DATA=DIR` keeps the scenario and its scores in DIR for the
+//!   next run.
 //!
 //! The sample scenario is copied to a temporary folder and scored once with a tiny random
 //! model (flow by DIS, as the samples ship without flow), so the bench needs no bundled

@@ -374,16 +374,9 @@ impl Canvas {
         if Self::text_size(text, size).0 <= width {
             return (text.to_string(), size);
         }
-        let chars: Vec<char> = text.chars().collect();
-        let mut keep = chars.len();
-        while keep > 0 {
-            keep -= 1;
-            let cut: String = chars[..keep]
-                .iter()
-                .collect::<String>()
-                .trim_end()
-                .to_string()
-                + "…";
+        // Longest prefix first: drop one character at a time until prefix + "…" fits.
+        for (end, _) in text.char_indices().rev() {
+            let cut = format!("{}…", text[..end].trim_end());
             if Self::text_size(&cut, size).0 <= width {
                 return (cut, size);
             }
@@ -413,7 +406,20 @@ impl Canvas {
         }
     }
 
-    /// Draws `text` on a translucent dark plate (for labels over images).
+    /// The padding around a label's text at `size` pixels.
+    fn label_pad(size: f64) -> i32 {
+        (size / 5.0).ceil() as i32
+    }
+
+    /// Width and height of the plate [`Canvas::label`] draws for `text` at `size` pixels.
+    pub(crate) fn label_size(text: &str, size: f64) -> (i32, i32) {
+        let (w, h) = Self::text_size(text, size);
+        let pad = Self::label_pad(size);
+        (w as i32 + 2 * pad, h as i32 + 2 * pad)
+    }
+
+    /// Draws `text` on a translucent dark plate (for labels over images), its top-left
+    /// corner at (x, y).
     pub(crate) fn label(
         &mut self,
         x: i32,
@@ -423,16 +429,9 @@ impl Canvas {
         color: [u8; 3],
         plate: [u8; 3],
     ) {
-        let (w, h) = Self::text_size(text, size);
-        let pad = (size / 5.0).ceil() as i32;
-        self.fill_rect(
-            x,
-            y,
-            x + w as i32 + 2 * pad,
-            y + h as i32 + 2 * pad,
-            plate,
-            0.8,
-        );
+        let (w, h) = Self::label_size(text, size);
+        let pad = Self::label_pad(size);
+        self.fill_rect(x, y, x + w, y + h, plate, 0.8);
         self.text(x + pad, y + pad, text, size, color, Anchor::TopLeft);
     }
 

@@ -301,28 +301,18 @@ pub(crate) fn draw_frame_view(
             Anchor::TopLeft,
         );
         if contour_drawn {
-            let _ = contour_key(canvas, (x, w), y + 4, text_width(&first, size), size)
-                || contour_key(
-                    canvas,
-                    (x, w),
-                    y + 4 + line + 2,
-                    text_width(&second, size),
-                    size,
-                );
+            let _ = contour_key(canvas, (x, w), y + 4, &first, size)
+                || contour_key(canvas, (x, w), y + 4 + line + 2, &second, size);
         }
     }
 }
 
-/// Width of `text` at `size` pixels.
-fn text_width(text: &str, size: f64) -> u32 {
-    Canvas::text_size(text, size).0
-}
-
-/// The key to the truth contour at the right end of a caption line starting at row `top`
-/// whose text is `used` pixels wide, when it fits there: an outlined swatch and its meaning,
-/// in the contour's colour. Whether it was drawn.
-fn contour_key(canvas: &mut Canvas, (x, w): (i32, u32), top: i32, used: u32, size: f64) -> bool {
+/// The key to the truth contour at the right end of the caption line `line` drawn at row
+/// `top`, when it fits there: an outlined swatch and its meaning, in the contour's colour.
+/// Whether it was drawn.
+fn contour_key(canvas: &mut Canvas, (x, w): (i32, u32), top: i32, line: &str, size: f64) -> bool {
     const KEY: &str = "ground-truth anomaly mask";
+    let used = Canvas::text_size(line, size).0;
     let (tw, th) = Canvas::text_size(KEY, size);
     let swatch = th as i32 * 2 / 3;
     let width = swatch + 6 + tw as i32;

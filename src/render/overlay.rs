@@ -170,9 +170,7 @@ pub(crate) fn draw_boxes(
             Some(s) => format!("#{} {s:.1}", object.track_id),
             None => format!("#{}", object.track_id),
         };
-        let (tw, th) = Canvas::text_size(&text, size);
-        let pad = (size / 5.0).ceil() as i32;
-        let (w, h) = (tw as i32 + 2 * pad, th as i32 + 2 * pad);
+        let (w, h) = Canvas::label_size(&text, size);
         let ly = if y0 - h >= place.y { y0 - h } else { y1 };
         let rect = (x0, ly, x0 + w, ly + h);
         let overlaps = taken

@@ -583,14 +583,13 @@ pub(crate) fn draw_timeline(
         let y = row_of(t, &layout.score_y, score_range);
         dashed(canvas, &layout, y, THRESHOLD);
         let text = format!("threshold {}", short_number(t));
-        let (tw, th) = Canvas::text_size(&text, layout.font);
-        let pad = (layout.font / 5.0).ceil() as i32;
+        let (lw, lh) = Canvas::label_size(&text, layout.font);
         let (lx, ly) = (
-            layout.plot_x.end - tw as i32 - 2 * pad - 2,
-            (y - th as i32 - 2 * pad - 2).max(layout.score_y.start),
+            layout.plot_x.end - lw - 2,
+            (y - lh - 2).max(layout.score_y.start),
         );
         canvas.label(lx, ly, &text, layout.font, THRESHOLD, [20, 20, 20]);
-        threshold_label = Some((lx, ly, tw as i32 + 2 * pad, th as i32 + 2 * pad));
+        threshold_label = Some((lx, ly, lw, lh));
     }
     if has_components {
         draw_series(
@@ -636,9 +635,7 @@ pub(crate) fn draw_timeline(
         let x = layout.x_of(cursor).floor() as i32;
         canvas.line(x, layout.score_y.start, x, layout.labels_y.end, CURSOR);
         let text = format!("frame {cursor}");
-        let (tw, th) = Canvas::text_size(&text, layout.font);
-        let pad = (layout.font / 5.0).ceil() as i32;
-        let (lw, lh) = (tw as i32 + 2 * pad, th as i32 + 2 * pad);
+        let (lw, lh) = Canvas::label_size(&text, layout.font);
         let top = layout.score_y.start + 2;
         // Right of the cursor, else left of it, else at the foot of the score band: the
         // first place that keeps clear of the threshold's label.

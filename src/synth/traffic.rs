@@ -759,13 +759,9 @@ impl<'a> Snapshot<'a> {
             .zip(dyns)
             .map(|(v, d)| pose_of(&v.route, d))
             .collect();
-        let mut by_s: Vec<usize> = (0..vehicles.len())
-            .filter(|&i| poses[i].cross_lane.is_none())
-            .collect();
+        let (crossing, mut by_s): (Vec<usize>, Vec<usize>) =
+            (0..vehicles.len()).partition(|&i| poses[i].cross_lane.is_some());
         by_s.sort_by(|&a, &b| poses[a].s.total_cmp(&poses[b].s).then(a.cmp(&b)));
-        let crossing = (0..vehicles.len())
-            .filter(|&i| poses[i].cross_lane.is_some())
-            .collect();
         Self {
             vehicles,
             poses,
