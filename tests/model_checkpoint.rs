@@ -82,6 +82,41 @@ fn saved_checkpoint_reloads_with_metadata_and_identical_outputs() {
 }
 
 #[test]
+fn saving_the_same_model_twice_gives_identical_bytes() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let config = ModelConfig::parity();
+    let device = Device::flex();
+    let model = Hf2Vad::new(&config, &device, &mut NoiseRng::new(5)).expect("model");
+    let meta = CheckpointMeta {
+        config,
+        stats: Some(stats()),
+        note: Some("reproducible".into()),
+    };
+    let files: Vec<Vec<u8>> = (0..3)
+        .map(|i| {
+            let path = dir.path().join(format!("model-{i}.safetensors"));
+            save_checkpoint(&path, &model, &meta).expect("save");
+            std::fs::read(&path).expect("read back")
+        })
+        .collect();
+    assert!(
+        files.windows(2).all(|w| w[0] == w[1]),
+        "checkpoint bytes differ between saves of the same model"
+    );
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .expect("list")
+        .map(|e| e.expect("entry").file_name())
+        .filter(|n| n.to_string_lossy().ends_with(".partial"))
+        .collect();
+    assert!(
+        leftovers.is_empty(),
+        "scratch files left behind: {leftovers:?}"
+    );
+    let loaded = load_checkpoint(&dir.path().join("model-0.safetensors"), &device).expect("load");
+    assert_eq!(loaded.meta, meta);
+}
+
+#[test]
 fn non_checkpoints_are_rejected_with_the_file_named() {
     let dir = tempfile::tempdir().expect("temp dir");
     let garbage = dir.path().join("garbage.safetensors");

@@ -9,12 +9,14 @@
 //! | `vadscope.note` | free text (e.g. which stage and epoch produced the file) |
 //!
 //! A single file cannot drift apart from its config or statistics, and any safetensors
-//! reader can still open it. The file is written to a scratch name and renamed into place.
+//! reader can still open it. The file is written to a scratch name and renamed into place,
+//! in a canonical layout (header keys sorted, tensors stored in name order), so saving the
+//! same model twice gives the same bytes: score caches key models by a hash of the file.
 
 use std::collections::HashMap;
 use std::fs::File;
-use std::io::Read;
-use std::path::Path;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
 
 use burn::module::Module;
 use burn::store::{ModuleSnapshot, SafetensorsStore};
@@ -62,7 +64,8 @@ pub fn save_checkpoint(
     meta: &CheckpointMeta,
 ) -> Result<(), ModelError> {
     let config = serde_json::to_string(&meta.config).map_err(|e| ModelError::save(path, e))?;
-    let mut store = SafetensorsStore::from_file(path)
+    let scratch = scratch_path(path);
+    let mut store = SafetensorsStore::from_file(&scratch)
         .overwrite(true)
         .metadata(KEY_FORMAT, CHECKPOINT_FORMAT)
         .metadata(KEY_CONFIG, config);
@@ -73,10 +76,97 @@ pub fn save_checkpoint(
     if let Some(note) = &meta.note {
         store = store.metadata(KEY_NOTE, note.clone());
     }
-    model
+    let written = model
         .valid()
         .save_into(&mut store)
         .map_err(|e| ModelError::save(path, e))
+        .and_then(|()| canonical_bytes(&scratch))
+        .and_then(|bytes| replace_file(&scratch, path, &bytes));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&scratch);
+    }
+    written
+}
+
+fn scratch_path(path: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".partial");
+    path.with_file_name(name)
+}
+
+/// The safetensors file at `path` re-laid out canonically: the header's keys (and those of
+/// `__metadata__`) sorted, tensor data stored in name order, the header padded with spaces
+/// to a multiple of 8 bytes. burn-store keeps both in hash maps, whose order changes from
+/// run to run.
+fn canonical_bytes(path: &Path) -> Result<Vec<u8>, ModelError> {
+    let bytes = std::fs::read(path).map_err(|e| ModelError::save(path, e))?;
+    let bad = |reason: &str| ModelError::save(path, format!("unexpected safetensors: {reason}"));
+    let len_bytes: [u8; 8] = bytes
+        .get(..8)
+        .and_then(|b| b.try_into().ok())
+        .ok_or_else(|| bad("no header length"))?;
+    let header_len = usize::try_from(u64::from_le_bytes(len_bytes))
+        .map_err(|_| bad("header length overflows"))?;
+    let data_start = 8usize
+        .checked_add(header_len)
+        .filter(|&end| end <= bytes.len())
+        .ok_or_else(|| bad("header runs past the end of the file"))?;
+    let header: serde_json::Map<String, serde_json::Value> =
+        serde_json::from_slice(&bytes[8..data_start]).map_err(|e| bad(&e.to_string()))?;
+    let data = &bytes[data_start..];
+
+    let mut names: Vec<&String> = header.keys().collect();
+    names.sort();
+    let mut out_header = serde_json::Map::new();
+    let mut out_data = Vec::with_capacity(data.len());
+    for name in names {
+        let entry = &header[name];
+        if name == "__metadata__" {
+            let mut sorted = entry.as_object().cloned().unwrap_or_default();
+            sorted.sort_keys();
+            out_header.insert(name.clone(), serde_json::Value::Object(sorted));
+            continue;
+        }
+        let mut entry = entry
+            .as_object()
+            .cloned()
+            .ok_or_else(|| bad("tensor entry is not an object"))?;
+        let offsets = entry
+            .get("data_offsets")
+            .and_then(|o| o.as_array())
+            .and_then(|o| Some((o.first()?.as_u64()?, o.get(1)?.as_u64()?)))
+            .ok_or_else(|| bad("tensor entry without data offsets"))?;
+        let (begin, end) = (offsets.0 as usize, offsets.1 as usize);
+        let slice = data
+            .get(begin..end)
+            .ok_or_else(|| bad("tensor data runs past the end of the file"))?;
+        let new_begin = out_data.len();
+        out_data.extend_from_slice(slice);
+        entry.insert(
+            "data_offsets".into(),
+            serde_json::json!([new_begin, out_data.len()]),
+        );
+        entry.sort_keys();
+        out_header.insert(name.clone(), serde_json::Value::Object(entry));
+    }
+    let mut header_bytes =
+        serde_json::to_vec(&out_header).map_err(|e| ModelError::save(path, e))?;
+    header_bytes.resize(header_bytes.len().next_multiple_of(8), b' ');
+    let mut out = Vec::with_capacity(8 + header_bytes.len() + out_data.len());
+    out.extend_from_slice(&(header_bytes.len() as u64).to_le_bytes());
+    out.extend_from_slice(&header_bytes);
+    out.extend_from_slice(&out_data);
+    Ok(out)
+}
+
+/// Writes `bytes` over `scratch`, flushes them to disk and renames `scratch` to `path`, so
+/// a crash leaves either the old checkpoint or the new one, never half of one.
+fn replace_file(scratch: &Path, path: &Path, bytes: &[u8]) -> Result<(), ModelError> {
+    let mut file = File::create(scratch).map_err(|e| ModelError::save(scratch, e))?;
+    file.write_all(bytes)
+        .and_then(|()| file.sync_all())
+        .map_err(|e| ModelError::save(scratch, e))?;
+    std::fs::rename(scratch, path).map_err(|e| ModelError::save(path, e))
 }
 
 /// The `__metadata__` map of a safetensors file's header.
