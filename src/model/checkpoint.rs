@@ -16,7 +16,7 @@
 use std::collections::HashMap;
 use std::fs::File;
 use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use burn::module::Module;
 use burn::store::{ModuleSnapshot, SafetensorsStore};
@@ -64,9 +64,7 @@ pub fn save_checkpoint(
     meta: &CheckpointMeta,
 ) -> Result<(), ModelError> {
     let config = serde_json::to_string(&meta.config).map_err(|e| ModelError::save(path, e))?;
-    let scratch = scratch_path(path);
-    let mut store = SafetensorsStore::from_file(&scratch)
-        .overwrite(true)
+    let mut store = SafetensorsStore::from_bytes(None)
         .metadata(KEY_FORMAT, CHECKPOINT_FORMAT)
         .metadata(KEY_CONFIG, config);
     if let Some(stats) = &meta.stats {
@@ -76,81 +74,63 @@ pub fn save_checkpoint(
     if let Some(note) = &meta.note {
         store = store.metadata(KEY_NOTE, note.clone());
     }
-    let written = model
+    model
         .valid()
         .save_into(&mut store)
-        .map_err(|e| ModelError::save(path, e))
-        .and_then(|()| canonical_bytes(&scratch))
-        .and_then(|bytes| replace_file(&scratch, path, &bytes));
-    if written.is_err() {
-        let _ = std::fs::remove_file(&scratch);
-    }
-    written
+        .map_err(|e| ModelError::save(path, e))?;
+    let bytes = store.get_bytes().map_err(|e| ModelError::save(path, e))?;
+    let bytes = canonical_bytes(&bytes).map_err(|reason| {
+        ModelError::save(
+            path,
+            format!("unexpected safetensors from burn-store: {reason}"),
+        )
+    })?;
+    replace_file(path, &bytes)
 }
 
-fn scratch_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(".partial");
-    path.with_file_name(name)
-}
-
-/// The safetensors file at `path` re-laid out canonically: the header's keys (and those of
+/// A safetensors file re-laid out canonically: the header's keys (and those of
 /// `__metadata__`) sorted, tensor data stored in name order, the header padded with spaces
 /// to a multiple of 8 bytes. burn-store keeps both in hash maps, whose order changes from
 /// run to run.
-fn canonical_bytes(path: &Path) -> Result<Vec<u8>, ModelError> {
-    let bytes = std::fs::read(path).map_err(|e| ModelError::save(path, e))?;
-    let bad = |reason: &str| ModelError::save(path, format!("unexpected safetensors: {reason}"));
-    let len_bytes: [u8; 8] = bytes
-        .get(..8)
-        .and_then(|b| b.try_into().ok())
-        .ok_or_else(|| bad("no header length"))?;
-    let header_len = usize::try_from(u64::from_le_bytes(len_bytes))
-        .map_err(|_| bad("header length overflows"))?;
-    let data_start = 8usize
-        .checked_add(header_len)
-        .filter(|&end| end <= bytes.len())
-        .ok_or_else(|| bad("header runs past the end of the file"))?;
-    let header: serde_json::Map<String, serde_json::Value> =
-        serde_json::from_slice(&bytes[8..data_start]).map_err(|e| bad(&e.to_string()))?;
-    let data = &bytes[data_start..];
+fn canonical_bytes(bytes: &[u8]) -> Result<Vec<u8>, String> {
+    let mut reader = bytes;
+    let (header, header_len) = read_header(&mut reader)?;
+    let header = header
+        .as_object()
+        .ok_or_else(|| "header is not a JSON object".to_string())?;
+    let data = &bytes[8 + header_len..];
 
     let mut names: Vec<&String> = header.keys().collect();
     names.sort();
     let mut out_header = serde_json::Map::new();
     let mut out_data = Vec::with_capacity(data.len());
     for name in names {
-        let entry = &header[name];
-        if name == "__metadata__" {
-            let mut sorted = entry.as_object().cloned().unwrap_or_default();
-            sorted.sort_keys();
-            out_header.insert(name.clone(), serde_json::Value::Object(sorted));
-            continue;
-        }
-        let mut entry = entry
+        let mut entry = header[name]
             .as_object()
             .cloned()
-            .ok_or_else(|| bad("tensor entry is not an object"))?;
-        let offsets = entry
-            .get("data_offsets")
-            .and_then(|o| o.as_array())
-            .and_then(|o| Some((o.first()?.as_u64()?, o.get(1)?.as_u64()?)))
-            .ok_or_else(|| bad("tensor entry without data offsets"))?;
-        let (begin, end) = (offsets.0 as usize, offsets.1 as usize);
-        let slice = data
-            .get(begin..end)
-            .ok_or_else(|| bad("tensor data runs past the end of the file"))?;
-        let new_begin = out_data.len();
-        out_data.extend_from_slice(slice);
-        entry.insert(
-            "data_offsets".into(),
-            serde_json::json!([new_begin, out_data.len()]),
-        );
+            .ok_or_else(|| format!("header entry '{name}' is not an object"))?;
         entry.sort_keys();
+        if name != "__metadata__" {
+            let (begin, end) = entry
+                .get("data_offsets")
+                .and_then(|o| o.as_array())
+                .and_then(|o| Some((o.first()?.as_u64()?, o.get(1)?.as_u64()?)))
+                .ok_or_else(|| format!("tensor '{name}' has no data offsets"))?;
+            let slice = usize::try_from(begin)
+                .ok()
+                .zip(usize::try_from(end).ok())
+                .and_then(|(begin, end)| data.get(begin..end))
+                .ok_or_else(|| format!("tensor '{name}' runs past the end of the data"))?;
+            let new_begin = out_data.len();
+            out_data.extend_from_slice(slice);
+            entry.insert(
+                "data_offsets".into(),
+                serde_json::json!([new_begin, out_data.len()]),
+            );
+        }
         out_header.insert(name.clone(), serde_json::Value::Object(entry));
     }
-    let mut header_bytes =
-        serde_json::to_vec(&out_header).map_err(|e| ModelError::save(path, e))?;
+    let mut header_bytes = serde_json::to_vec(&out_header).map_err(|e| e.to_string())?;
     header_bytes.resize(header_bytes.len().next_multiple_of(8), b' ');
     let mut out = Vec::with_capacity(8 + header_bytes.len() + out_data.len());
     out.extend_from_slice(&(header_bytes.len() as u64).to_le_bytes());
@@ -159,34 +139,47 @@ fn canonical_bytes(path: &Path) -> Result<Vec<u8>, ModelError> {
     Ok(out)
 }
 
-/// Writes `bytes` over `scratch`, flushes them to disk and renames `scratch` to `path`, so
-/// a crash leaves either the old checkpoint or the new one, never half of one.
-fn replace_file(scratch: &Path, path: &Path, bytes: &[u8]) -> Result<(), ModelError> {
-    let mut file = File::create(scratch).map_err(|e| ModelError::save(scratch, e))?;
-    file.write_all(bytes)
-        .and_then(|()| file.sync_all())
-        .map_err(|e| ModelError::save(scratch, e))?;
-    std::fs::rename(scratch, path).map_err(|e| ModelError::save(path, e))
+/// Writes `bytes` to a scratch file beside `path`, flushes them to disk and renames the
+/// scratch file to `path`, so a crash leaves either the old checkpoint or the new one,
+/// never half of one.
+fn replace_file(path: &Path, bytes: &[u8]) -> Result<(), ModelError> {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".partial");
+    let scratch = path.with_file_name(name);
+    let written = File::create(&scratch)
+        .and_then(|mut file| file.write_all(bytes).and_then(|()| file.sync_all()))
+        .map_err(|e| ModelError::save(&scratch, e))
+        .and_then(|()| std::fs::rename(&scratch, path).map_err(|e| ModelError::save(path, e)));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&scratch);
+    }
+    written
+}
+
+/// The JSON header at the start of a safetensors stream and its length in bytes, leaving
+/// `reader` at the first byte of tensor data.
+fn read_header(reader: &mut impl Read) -> Result<(serde_json::Value, usize), String> {
+    let mut len = [0u8; 8];
+    reader
+        .read_exact(&mut len)
+        .map_err(|e| format!("not a safetensors file: {e}"))?;
+    let len = u64::from_le_bytes(len);
+    if len > MAX_HEADER {
+        return Err(format!("safetensors header of {len} bytes is implausible"));
+    }
+    let mut header = vec![0u8; len as usize];
+    reader
+        .read_exact(&mut header)
+        .map_err(|e| format!("truncated safetensors header: {e}"))?;
+    let header = serde_json::from_slice(&header)
+        .map_err(|e| format!("safetensors header is not JSON: {e}"))?;
+    Ok((header, len as usize))
 }
 
 /// The `__metadata__` map of a safetensors file's header.
 fn read_header_metadata(path: &Path) -> Result<HashMap<String, String>, ModelError> {
     let mut file = File::open(path).map_err(|e| ModelError::load(path, e))?;
-    let mut len = [0u8; 8];
-    file.read_exact(&mut len)
-        .map_err(|e| ModelError::load(path, format!("not a safetensors file: {e}")))?;
-    let len = u64::from_le_bytes(len);
-    if len > MAX_HEADER {
-        return Err(ModelError::load(
-            path,
-            format!("safetensors header of {len} bytes is implausible"),
-        ));
-    }
-    let mut header = vec![0u8; len as usize];
-    file.read_exact(&mut header)
-        .map_err(|e| ModelError::load(path, format!("truncated safetensors header: {e}")))?;
-    let header: serde_json::Value = serde_json::from_slice(&header)
-        .map_err(|e| ModelError::load(path, format!("safetensors header is not JSON: {e}")))?;
+    let (header, _) = read_header(&mut file).map_err(|reason| ModelError::load(path, reason))?;
     let metadata = header
         .get("__metadata__")
         .and_then(|m| m.as_object())
