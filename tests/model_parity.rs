@@ -268,6 +268,18 @@ fn hf2vad_from_safetensors_reproduces_reference_outputs_and_losses() {
 }
 
 #[test]
+fn lowered_inference_layers_reproduce_reference_outputs() {
+    let Some(mut fx) = Fixtures::open(Device::flex()) else {
+        return;
+    };
+    let mut model = fx.hf2vad_from_safetensors();
+    model.memae = model.memae.lowered();
+    model.vunet = model.vunet.lowered();
+    let out = model.forward(fx.frames(), fx.tensor("input.flows"), &Latents::Mean, None);
+    check_hf2vad_outputs(&mut fx, &out);
+}
+
+#[test]
 fn hf2vad_from_pytorch_checkpoint_reproduces_reference_outputs() {
     let Some(mut fx) = Fixtures::open(Device::flex()) else {
         return;

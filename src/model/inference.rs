@@ -62,7 +62,8 @@ impl Detector {
     pub fn new(model: Hf2Vad, meta: CheckpointMeta, device: &Device) -> Result<Self, ModelError> {
         meta.config.validate()?;
         let mut model = model.valid().to_device(device);
-        model.vunet = model.vunet.folded();
+        model.memae = model.memae.lowered();
+        model.vunet = model.vunet.lowered();
         Ok(Self {
             model,
             meta,

@@ -12,6 +12,7 @@ use burn::tensor::module::{batch_norm_train, conv2d};
 use burn::tensor::ops::ConvOptions;
 use burn::tensor::{Device, Tensor, TensorData};
 
+use super::gemm_conv::{Activation, ConvGeometry, GemmConv2d};
 use super::rng::NoiseRng;
 
 /// A parameter holding `values` with `shape` on `device`.
@@ -220,10 +221,10 @@ pub struct NormConv2d {
     pub gamma: Param<Tensor<4>>,
     /// The weight-normalised convolution.
     pub conv: WeightNormConv2d,
-    /// γ, β and the weight norm folded into one conv, set by [`NormConv2d::folded`] for
+    /// γ, β and the weight norm folded into one conv, set by [`NormConv2d::lowered`] for
     /// inference. Used only on non-autodiff devices; weights must not change afterwards.
     #[module(skip)]
-    pub cache: Option<FoldedConv>,
+    pub cache: Option<GemmConv2d>,
 }
 
 impl NormConv2d {
@@ -276,45 +277,27 @@ impl NormConv2d {
         out * self.gamma.val() + self.beta.val()
     }
 
-    /// The layer with γ and β folded into a plain weight and bias (same outputs, one conv):
-    /// for inference, where the weights do not change between calls.
-    pub fn fold(&self) -> FoldedConv {
+    /// The layer with γ, β and the weight norm folded into one plain convolution, lowered
+    /// for batched inference (same outputs).
+    pub fn lower(&self) -> GemmConv2d {
         let gamma = self.gamma.val();
         let [_, cout, _, _] = gamma.dims();
         let gamma_col = gamma.clone().reshape([cout, 1, 1, 1]);
         let weight = self.conv.weight() * gamma_col;
         let bias = self.conv.bias.val() * gamma.reshape([cout]) + self.beta.val().reshape([cout]);
-        FoldedConv {
-            weight,
-            bias,
-            options: self.conv.options(),
-        }
+        let [.., kernel, _] = weight.dims();
+        let geometry = ConvGeometry {
+            kernel,
+            stride: self.conv.stride,
+            padding: self.conv.padding,
+        };
+        GemmConv2d::new(weight, bias, geometry, Activation::Identity)
     }
 
     /// The layer with its folded form cached for inference (see [`NormConv2d::cache`]).
-    pub fn folded(self) -> Self {
-        let cache = Some(self.fold());
+    pub fn lowered(self) -> Self {
+        let cache = Some(self.lower());
         Self { cache, ..self }
-    }
-}
-
-/// A [`NormConv2d`] with everything folded into one weight and bias.
-#[derive(Debug, Clone)]
-pub struct FoldedConv {
-    weight: Tensor<4>,
-    bias: Tensor<1>,
-    options: ConvOptions<2>,
-}
-
-impl FoldedConv {
-    /// Applies the folded convolution.
-    pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
-        conv2d(
-            x,
-            self.weight.clone(),
-            Some(self.bias.clone()),
-            self.options.clone(),
-        )
     }
 }
 
@@ -342,10 +325,10 @@ pub struct ResBlock {
 }
 
 impl ResBlock {
-    /// The block with its convolution folded for inference.
-    pub fn folded(self) -> Self {
+    /// The block with its convolution lowered for inference.
+    pub fn lowered(self) -> Self {
         Self {
-            conv2d: self.conv2d.folded(),
+            conv2d: self.conv2d.lowered(),
             ..self
         }
     }
@@ -378,11 +361,11 @@ pub struct SkipResBlock {
 }
 
 impl SkipResBlock {
-    /// The block with its convolutions folded for inference.
-    pub fn folded(self) -> Self {
+    /// The block with its convolutions lowered for inference.
+    pub fn lowered(self) -> Self {
         Self {
-            conv2d: self.conv2d.folded(),
-            pre: self.pre.folded(),
+            conv2d: self.conv2d.lowered(),
+            pre: self.pre.lowered(),
             ..self
         }
     }
@@ -413,10 +396,10 @@ pub struct Upsample {
 }
 
 impl Upsample {
-    /// The upsampler with its convolution folded for inference.
-    pub fn folded(self) -> Self {
+    /// The upsampler with its convolution lowered for inference.
+    pub fn lowered(self) -> Self {
         Self {
-            up: self.up.folded(),
+            up: self.up.lowered(),
         }
     }
 
@@ -441,10 +424,10 @@ pub struct Downsample {
 }
 
 impl Downsample {
-    /// The downsampler with its convolution folded for inference.
-    pub fn folded(self) -> Self {
+    /// The downsampler with its convolution lowered for inference.
+    pub fn lowered(self) -> Self {
         Self {
-            down: self.down.folded(),
+            down: self.down.lowered(),
         }
     }
 
@@ -517,7 +500,7 @@ mod tests {
     }
 
     #[test]
-    fn folded_conv_matches_the_layer() {
+    fn lowered_conv_matches_the_layer() {
         let device = Device::flex();
         let mut rng = NoiseRng::new(2);
         let mut layer = NormConv2d::new(4, 3, 3, 2, 1, &device, &mut rng);
@@ -529,7 +512,7 @@ mod tests {
             &device,
         );
         let a = values(layer.forward(x.clone()));
-        let b = values(layer.folded().forward(x));
+        let b = values(layer.lowered().forward(x));
         let max = a
             .iter()
             .zip(&b)

@@ -7,6 +7,7 @@ use burn::tensor::activation::{relu, softmax};
 use burn::tensor::{Device, Tensor};
 
 use super::config::{FLOW_CHANNELS, ModelConfig, SkipOp};
+use super::gemm_conv::{Activation, ConvGeometry, GemmConv2d, GemmConvTranspose2d};
 use super::layers::{BatchNorm2d, kaiming_conv, param, upsampling_conv};
 use super::rng::NoiseRng;
 
@@ -21,6 +22,10 @@ pub struct DoubleConv {
     pub conv2: Conv2d,
     /// Second BatchNorm.
     pub bn2: BatchNorm2d,
+    /// Both stages with BatchNorm's running statistics folded in and ReLU fused, set by
+    /// [`MlMemAeSc::lowered`] for inference on non-autodiff devices.
+    #[module(skip)]
+    pub lowered: Option<[GemmConv2d; 2]>,
 }
 
 impl DoubleConv {
@@ -30,11 +35,25 @@ impl DoubleConv {
             bn1: BatchNorm2d::new(cout, device, rng),
             conv2: kaiming_conv([cout, cout], 3, 1, 1, device, rng),
             bn2: BatchNorm2d::new(cout, device, rng),
+            lowered: None,
         }
+    }
+
+    fn lowered(self) -> Self {
+        let lowered = Some([
+            lower_conv(&self.conv1, Some(&self.bn1), Activation::Relu),
+            lower_conv(&self.conv2, Some(&self.bn2), Activation::Relu),
+        ]);
+        Self { lowered, ..self }
     }
 
     /// Applies both conv–BN–ReLU stages.
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        if let Some([first, second]) = &self.lowered
+            && !x.device().is_autodiff()
+        {
+            return second.forward(first.forward(x));
+        }
         let x = relu(self.bn1.forward(self.conv1.forward(x)));
         relu(self.bn2.forward(self.conv2.forward(x)))
     }
@@ -47,6 +66,9 @@ pub struct Down {
     pub conv: Conv2d,
     /// The double convolution after it.
     pub double: DoubleConv,
+    /// `conv` lowered for inference (see [`MlMemAeSc::lowered`]).
+    #[module(skip)]
+    pub lowered: Option<GemmConv2d>,
 }
 
 impl Down {
@@ -54,12 +76,25 @@ impl Down {
         Self {
             conv: kaiming_conv([cin, cout], 3, 2, 1, device, rng),
             double: DoubleConv::new(cout, cout, device, rng),
+            lowered: None,
+        }
+    }
+
+    fn lowered(self) -> Self {
+        Self {
+            lowered: Some(lower_conv(&self.conv, None, Activation::Identity)),
+            double: self.double.lowered(),
+            ..self
         }
     }
 
     /// Halves the resolution of `x` and doubles its channels.
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
-        self.double.forward(self.conv.forward(x))
+        let x = match &self.lowered {
+            Some(conv) if !x.device().is_autodiff() => conv.forward(x),
+            _ => self.conv.forward(x),
+        };
+        self.double.forward(x)
     }
 }
 
@@ -73,6 +108,9 @@ pub struct Up {
     pub double: DoubleConv,
     /// Whether the encoder feature is concatenated.
     pub concat: bool,
+    /// `up` lowered for inference (see [`MlMemAeSc::lowered`]).
+    #[module(skip)]
+    pub lowered: Option<GemmConvTranspose2d>,
 }
 
 impl Up {
@@ -84,12 +122,35 @@ impl Up {
             up: upsampling_conv([cin, cout], device, rng),
             double: DoubleConv::new(fused, cout, device, rng),
             concat,
+            lowered: None,
+        }
+    }
+
+    fn lowered(self) -> Self {
+        let up = &self.up;
+        let bias = up.bias.as_ref().map_or_else(
+            || Tensor::zeros([up.channels[1]], &up.weight.device()),
+            |b| b.val(),
+        );
+        let geometry = ConvGeometry {
+            kernel: up.kernel_size[0],
+            stride: up.stride[0],
+            padding: up.padding[0],
+        };
+        let lowered = GemmConvTranspose2d::new(up.weight.val(), bias, geometry, up.padding_out[0]);
+        Self {
+            lowered: Some(lowered),
+            double: self.double.lowered(),
+            ..self
         }
     }
 
     /// Upsamples `x` and fuses it with the encoder feature `skip` (ignored without concat).
     pub fn forward(&self, x: Tensor<4>, skip: Tensor<4>) -> Tensor<4> {
-        let up = self.up.forward(x);
+        let up = match &self.lowered {
+            Some(up) if !x.device().is_autodiff() => up.forward(x),
+            _ => self.up.forward(x),
+        };
         let fused = if self.concat {
             Tensor::cat(vec![skip, up], 1)
         } else {
@@ -211,6 +272,9 @@ pub struct MlMemAeSc {
     pub out_conv: Conv2d,
     /// Slots per memory (for the dummy attention of disabled memories).
     pub num_slots: usize,
+    /// `out_conv` lowered for inference (see [`MlMemAeSc::lowered`]).
+    #[module(skip)]
+    pub out_lowered: Option<GemmConv2d>,
 }
 
 impl MlMemAeSc {
@@ -241,6 +305,25 @@ impl MlMemAeSc {
             up_1: Up::new(2 * fr, config.skip_ops[0], device, rng),
             out_conv: kaiming_conv([fr, FLOW_CHANNELS], 1, 1, 0, device, rng),
             num_slots: config.num_slots,
+            out_lowered: None,
+        }
+    }
+
+    /// The network with every convolution lowered to batched GEMMs for inference, BatchNorm's
+    /// running statistics folded into the weights (same outputs in eval mode). The lowered
+    /// layers run only on non-autodiff devices and copy the weights: lower again after the
+    /// weights change.
+    pub fn lowered(self) -> Self {
+        Self {
+            in_conv: self.in_conv.lowered(),
+            down_1: self.down_1.lowered(),
+            down_2: self.down_2.lowered(),
+            down_3: self.down_3.lowered(),
+            up_3: self.up_3.lowered(),
+            up_2: self.up_2.lowered(),
+            up_1: self.up_1.lowered(),
+            out_lowered: Some(lower_conv(&self.out_conv, None, Activation::Identity)),
+            ..self
         }
     }
 
@@ -271,7 +354,10 @@ impl MlMemAeSc {
         let h = self.up_2.forward(h, x1);
         let h = through(&self.mem1, h, 0);
         let h = self.up_1.forward(h, x0);
-        let recon = self.out_conv.forward(h);
+        let recon = match &self.out_lowered {
+            Some(conv) if !h.device().is_autodiff() => conv.forward(h),
+            _ => self.out_conv.forward(h),
+        };
 
         let attention =
             attention.map(|a| a.unwrap_or_else(|| Tensor::zeros([batch, self.num_slots], &device)));
@@ -288,4 +374,38 @@ impl MlMemAeSc {
     pub fn batch_statistics(&self, device: &Device) -> bool {
         device.is_autodiff() && self.in_conv.bn1.training.is_enabled()
     }
+}
+
+/// `conv`, followed by `bn` in eval mode (running statistics) when given, as one lowered
+/// convolution: y = γ·(W*x + b − μ)/√(σ² + ε) + β folds into W' = W·s, b' = (b − μ)·s + β
+/// with s = γ/√(σ² + ε).
+fn lower_conv(conv: &Conv2d, bn: Option<&BatchNorm2d>, activation: Activation) -> GemmConv2d {
+    let weight = conv.weight.val();
+    let [cout, _, kernel, _] = weight.dims();
+    let device = weight.device();
+    let bias = conv
+        .bias
+        .as_ref()
+        .map_or_else(|| Tensor::zeros([cout], &device), |b| b.val());
+    let (weight, bias) = match bn {
+        Some(bn) => {
+            let var = bn.running_var.value_sync().to_device(&device);
+            let mean = bn.running_mean.value_sync().to_device(&device);
+            let scale = bn.weight.val() / var.add_scalar(bn.eps).sqrt();
+            let bias = (bias - mean) * scale.clone() + bn.bias.val();
+            (weight * scale.reshape([cout, 1, 1, 1]), bias)
+        }
+        None => (weight, bias),
+    };
+    let padding = match conv.padding {
+        burn::nn::PaddingConfig2d::Explicit(top, ..) => top,
+        burn::nn::PaddingConfig2d::Valid => 0,
+        burn::nn::PaddingConfig2d::Same => kernel / 2,
+    };
+    let geometry = ConvGeometry {
+        kernel,
+        stride: conv.stride[0],
+        padding,
+    };
+    GemmConv2d::new(weight, bias, geometry, activation)
 }

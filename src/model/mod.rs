@@ -10,6 +10,7 @@ pub mod bundled;
 pub mod checkpoint;
 pub mod config;
 pub mod error;
+pub mod gemm_conv;
 pub mod hf2vad;
 pub mod inference;
 pub mod layers;

@@ -35,11 +35,11 @@ pub struct VunetEncoder {
 }
 
 impl VunetEncoder {
-    fn folded(self) -> Self {
+    fn lowered(self) -> Self {
         Self {
-            in_op: self.in_op.folded(),
-            blocks: self.blocks.into_iter().map(ResBlock::folded).collect(),
-            downs: self.downs.into_iter().map(Downsample::folded).collect(),
+            in_op: self.in_op.lowered(),
+            blocks: self.blocks.into_iter().map(ResBlock::lowered).collect(),
+            downs: self.downs.into_iter().map(Downsample::lowered).collect(),
         }
     }
 
@@ -110,12 +110,12 @@ struct Posterior {
 }
 
 impl ZConverter {
-    fn folded(self) -> Self {
+    fn lowered(self) -> Self {
         Self {
-            conv1x1: self.conv1x1.folded(),
-            blocks: self.blocks.into_iter().map(SkipResBlock::folded).collect(),
-            channel_norm: self.channel_norm.folded(),
-            up: self.up.folded(),
+            conv1x1: self.conv1x1.lowered(),
+            blocks: self.blocks.into_iter().map(SkipResBlock::lowered).collect(),
+            channel_norm: self.channel_norm.lowered(),
+            up: self.up.lowered(),
         }
     }
 
@@ -186,23 +186,23 @@ pub struct Bottleneck {
 }
 
 impl Bottleneck {
-    fn folded(self) -> Self {
+    fn lowered(self) -> Self {
         Self {
-            conv1x1: self.conv1x1.folded(),
-            blocks: self.blocks.into_iter().map(SkipResBlock::folded).collect(),
+            conv1x1: self.conv1x1.lowered(),
+            blocks: self.blocks.into_iter().map(SkipResBlock::lowered).collect(),
             channel_norm: self
                 .channel_norm
                 .into_iter()
-                .map(NormConv2d::folded)
+                .map(NormConv2d::lowered)
                 .collect(),
-            up: self.up.folded(),
-            auto_first: self.auto_first.folded(),
+            up: self.up.lowered(),
+            auto_first: self.auto_first.lowered(),
             auto_rest: self
                 .auto_rest
                 .into_iter()
-                .map(SkipResBlock::folded)
+                .map(SkipResBlock::lowered)
                 .collect(),
-            param_converter: self.param_converter.folded(),
+            param_converter: self.param_converter.lowered(),
         }
     }
 
@@ -283,11 +283,11 @@ pub struct Decoder {
 }
 
 impl Decoder {
-    fn folded(self) -> Self {
+    fn lowered(self) -> Self {
         Self {
-            ups: self.ups.into_iter().map(Upsample::folded).collect(),
-            blocks: self.blocks.into_iter().map(SkipResBlock::folded).collect(),
-            final_layer: self.final_layer.folded(),
+            ups: self.ups.into_iter().map(Upsample::lowered).collect(),
+            blocks: self.blocks.into_iter().map(SkipResBlock::lowered).collect(),
+            final_layer: self.final_layer.lowered(),
         }
     }
 
@@ -442,16 +442,16 @@ pub struct Vunet {
 }
 
 impl Vunet {
-    /// The CVAE with every weight-normalised conv folded into a plain conv, for inference on
-    /// a non-autodiff device. The weights must not change afterwards (the folded copies
-    /// would go stale); training ignores the folded copies.
-    pub fn folded(self) -> Self {
+    /// The CVAE with every weight-normalised conv folded into a plain conv and lowered to
+    /// batched GEMMs, for inference on a non-autodiff device. The weights must not change
+    /// afterwards (the lowered copies would go stale); training ignores them.
+    pub fn lowered(self) -> Self {
         Self {
-            f_phi: self.f_phi.folded(),
-            e_theta: self.e_theta.folded(),
-            zc: self.zc.folded(),
-            bottleneck: self.bottleneck.folded(),
-            decoder: self.decoder.folded(),
+            f_phi: self.f_phi.lowered(),
+            e_theta: self.e_theta.lowered(),
+            zc: self.zc.lowered(),
+            bottleneck: self.bottleneck.lowered(),
+            decoder: self.decoder.lowered(),
             n_stages: self.n_stages,
         }
     }
