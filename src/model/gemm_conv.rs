@@ -15,28 +15,65 @@
 use std::cell::RefCell;
 
 use burn::tensor::{Tensor, TensorData};
+use burn_flex::{Flex, FlexTensor};
 use rayon::prelude::*;
 
 /// About how many values one tile's unfolded input holds (4 MiB): large enough that the
 /// GEMM amortises its packing, small enough to stay in a core's cache hierarchy.
 const TILE_VALUES: usize = 1 << 20;
 
-/// The nonlinearity fused into a layer's write-back.
+/// A nonlinearity fused into a layer: on its input while it is unfolded, or on its output
+/// while it is written back.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Activation {
     /// No activation.
     Identity,
     /// max(x, 0).
     Relu,
+    /// ELU with α = 1: x for x > 0, else eˣ − 1.
+    Elu,
 }
 
 impl Activation {
-    fn apply(self, x: f32) -> f32 {
+    /// Applies the activation to every value of `values`; the match sits outside the loops
+    /// so each one vectorises.
+    fn apply(self, values: &mut [f32]) {
         match self {
-            Self::Identity => x,
-            Self::Relu => x.max(0.0),
+            Self::Identity => {}
+            Self::Relu => values.iter_mut().for_each(|v| *v = v.max(0.0)),
+            Self::Elu => values.iter_mut().for_each(|v| {
+                *v = if *v > 0.0 {
+                    *v
+                } else {
+                    exp_non_positive(*v) - 1.0
+                }
+            }),
         }
     }
+}
+
+/// eˣ for x ≤ 0 to within a few ulp, without a libm call so that loops over it vectorise:
+/// x = n·ln 2 + r with |r| ≤ ln 2 / 2, eʳ by its degree-6 Taylor polynomial (error below
+/// r⁷/7! ≈ 3·10⁻⁷ relative), 2ⁿ assembled in the exponent bits. Below −87 the result
+/// (< 2⁻¹²⁵) is flushed to the smallest normal instead of going subnormal.
+#[inline(always)]
+fn exp_non_positive(x: f32) -> f32 {
+    const LN2_HI: f32 = 0.693_359_4;
+    const LN2_LO: f32 = -2.121_944_4e-4;
+    // Adding and subtracting 1.5·2²³ rounds to the nearest integer without SSE4.1's roundss.
+    const ROUND: f32 = 12_582_912.0;
+    let x = x.max(-87.0);
+    let n = (x * std::f32::consts::LOG2_E + ROUND) - ROUND;
+    let r = x - n * LN2_HI - n * LN2_LO;
+    let p = 1.0 / 720.0;
+    let p = p * r + 1.0 / 120.0;
+    let p = p * r + 1.0 / 24.0;
+    let p = p * r + 1.0 / 6.0;
+    let p = p * r + 0.5;
+    let p = p * r + 1.0;
+    let p = p * r + 1.0;
+    let scale = f32::from_bits(((n as i32 + 127) as u32) << 23);
+    p * scale
 }
 
 /// Geometry of a square-kernel convolution with symmetric zero padding.
@@ -94,29 +131,48 @@ impl GemmConv2d {
 
     /// Applies the layer to `x` [B, C_in, H, W].
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
-        let device = x.device();
-        let [batch, cin, h, w] = x.dims();
-        assert_eq!(cin, self.cin, "GemmConv2d: input channels");
+        self.forward_fused(vec![x], Activation::Identity, false)
+    }
+
+    /// Applies the layer to the channel-wise concatenation of `parts` (each [B, C_p, H, W]),
+    /// with `input_activation` applied to the input first and, with `add_first_part`, the
+    /// first part added to the result as a residual (VUNet's blocks):
+    /// `[parts[0] +] act(conv(input_activation(cat(parts))))`, without materialising the
+    /// concatenation, the activated input or the sum as tensors of their own.
+    pub fn forward_fused(
+        &self,
+        parts: Vec<Tensor<4>>,
+        input_activation: Activation,
+        add_first_part: bool,
+    ) -> Tensor<4> {
+        let device = parts[0].device();
+        let [batch, _, h, w] = parts[0].dims();
+        let input = ConvInput::new(parts, [h, w]);
+        assert_eq!(input.channels, self.cin, "GemmConv2d: input channels");
         let g = self.geometry;
         let (oh, ow) = (g.output_side(h), g.output_side(w));
-        let input = values(x);
+        let residual = add_first_part.then(|| {
+            let (values, c) = &input.parts[0];
+            assert!(
+                *c == self.cout && [oh, ow] == [h, w],
+                "GemmConv2d: a residual must have the output's shape"
+            );
+            values.as_slice()
+        });
         let k = self.cin * g.kernel * g.kernel;
-        let (in_len, out_len) = (cin * h * w, self.cout * oh * ow);
+        let out_len = self.cout * oh * ow;
         let per_tile = samples_per_tile(k * oh * ow, batch);
         let mut out = vec![0.0f32; batch * out_len];
         let run_tile = |(tile, out): (usize, &mut [f32]), parallelism: gemm::Parallelism| {
             let first = tile * per_tile;
             let samples = out.len() / out_len;
             let cols_n = samples * oh * ow;
-            with_scratch(k * cols_n + self.cout * cols_n, |scratch| {
-                let (cols, product) = scratch.split_at_mut(k * cols_n);
-                im2col(
-                    &input[first * in_len..(first + samples) * in_len],
-                    [samples, cin, h, w],
-                    g,
-                    [oh, ow],
-                    cols,
-                );
+            let staged = input.staged_len(samples, input_activation);
+            with_scratch(staged + k * cols_n + self.cout * cols_n, |scratch| {
+                let (staging, rest) = scratch.split_at_mut(staged);
+                let (cols, product) = rest.split_at_mut(k * cols_n);
+                let source = input.tile(first, samples, input_activation, staging);
+                im2col(source, [samples, self.cin, h, w], g, [oh, ow], cols);
                 // SAFETY: every slice is as long as the dimensions and strides describe.
                 unsafe {
                     matmul(
@@ -127,10 +183,12 @@ impl GemmConv2d {
                         parallelism,
                     )
                 };
+                let residual = residual.map(|r| &r[first * out_len..(first + samples) * out_len]);
                 write_back(
                     product,
                     &self.bias,
                     self.activation,
+                    residual,
                     [samples, self.cout, oh * ow],
                     out,
                 );
@@ -138,6 +196,94 @@ impl GemmConv2d {
         };
         run_tiles(&mut out, per_tile * out_len, run_tile);
         tensor(out, [batch, self.cout, oh, ow], &device)
+    }
+}
+
+/// A tensor's values on burn's CPU backend, read in place (copied only when the tensor is a
+/// strided view): activations are often shared with a skip connection, where taking them
+/// out with `into_data` would copy.
+struct CpuValues(FlexTensor);
+
+impl CpuValues {
+    fn new<const D: usize>(t: Tensor<D>) -> Self {
+        let flex = t
+            .try_into_primitive::<Flex>()
+            .expect("lowered layers run on burn's CPU backend");
+        if flex.is_contiguous() && flex.layout().start_offset() == 0 {
+            Self(flex)
+        } else {
+            Self(flex.to_contiguous())
+        }
+    }
+
+    fn as_slice(&self) -> &[f32] {
+        &self.0.storage::<f32>()[..self.0.layout().num_elements()]
+    }
+}
+
+/// A convolution's input: one or more NCHW tensors concatenated along channels.
+struct ConvInput {
+    /// Each part's values and channel count.
+    parts: Vec<(CpuValues, usize)>,
+    /// Channels of all parts together.
+    channels: usize,
+    /// H·W.
+    area: usize,
+}
+
+impl ConvInput {
+    fn new(parts: Vec<Tensor<4>>, [h, w]: [usize; 2]) -> Self {
+        let parts: Vec<(CpuValues, usize)> = parts
+            .into_iter()
+            .map(|part| {
+                let [_, c, ph, pw] = part.dims();
+                assert_eq!([ph, pw], [h, w], "GemmConv2d: parts differ in size");
+                (CpuValues::new(part), c)
+            })
+            .collect();
+        let channels = parts.iter().map(|(_, c)| c).sum();
+        Self {
+            parts,
+            channels,
+            area: h * w,
+        }
+    }
+
+    /// Values a tile of `samples` needs staged: none when it can read the single part as it
+    /// is.
+    fn staged_len(&self, samples: usize, activation: Activation) -> usize {
+        if self.parts.len() == 1 && activation == Activation::Identity {
+            0
+        } else {
+            samples * self.channels * self.area
+        }
+    }
+
+    /// Samples `first..first + samples` as one [samples, C, H, W] block with `activation`
+    /// applied: a slice of the input itself where possible, else staged in `staging`.
+    fn tile<'a>(
+        &'a self,
+        first: usize,
+        samples: usize,
+        activation: Activation,
+        staging: &'a mut [f32],
+    ) -> &'a [f32] {
+        let sample_len = self.channels * self.area;
+        if staging.is_empty() {
+            return &self.parts[0].0.as_slice()[first * sample_len..(first + samples) * sample_len];
+        }
+        for (sample, dst) in staging.chunks_mut(sample_len).enumerate() {
+            let mut offset = 0;
+            for (values, c) in &self.parts {
+                let len = c * self.area;
+                let src = &values.as_slice()[(first + sample) * len..][..len];
+                let dst = &mut dst[offset..offset + len];
+                dst.copy_from_slice(src);
+                activation.apply(dst);
+                offset += len;
+            }
+        }
+        staging
     }
 }
 
@@ -191,7 +337,8 @@ impl GemmConvTranspose2d {
         let [batch, cin, h, w] = x.dims();
         assert_eq!(cin, self.cin, "GemmConvTranspose2d: input channels");
         let (oh, ow) = (self.output_side(h), self.output_side(w));
-        let input = values(x);
+        let input = CpuValues::new(x);
+        let input = input.as_slice();
         let kk = self.geometry.kernel * self.geometry.kernel;
         let rows = self.cout * kk;
         let (in_len, out_len) = (cin * h * w, self.cout * oh * ow);
@@ -317,6 +464,9 @@ fn im2col(
     [oh, ow]: [usize; 2],
     cols: &mut [f32],
 ) {
+    if g.stride == 1 && [oh, ow] == [h, w] {
+        return im2col_same(input, [b, c, h, w], g, cols);
+    }
     let cols_n = b * oh * ow;
     for (row, dst_row) in cols.chunks_mut(cols_n).enumerate() {
         let ch = row / (g.kernel * g.kernel);
@@ -344,13 +494,46 @@ fn im2col(
                 }
                 let src = &plane[iy * w..][..w];
                 let first = ox_lo * g.stride + kx - g.padding;
-                let dst = &mut dst[ox_lo..ox_hi];
-                if g.stride == 1 {
-                    dst.copy_from_slice(&src[first..first + dst.len()]);
-                } else {
-                    for (d, s) in dst.iter_mut().zip(src[first..].iter().step_by(g.stride)) {
-                        *d = *s;
-                    }
+                for (d, s) in dst[ox_lo..ox_hi]
+                    .iter_mut()
+                    .zip(src[first..].iter().step_by(g.stride))
+                {
+                    *d = *s;
+                }
+            }
+        }
+    }
+}
+
+/// [`im2col`] for stride-1 convolutions that keep the map's size (k = 2p + 1): each row of
+/// `cols` is the input plane shifted by (ky − p)·W + (kx − p) in flattened order, so it is
+/// one long copy per plane, after which the columns that wrapped around a row edge are
+/// zeroed. Rows of a few values each would spend more on per-copy overhead than on data.
+fn im2col_same(input: &[f32], [b, c, h, w]: [usize; 4], g: ConvGeometry, cols: &mut [f32]) {
+    let area = h * w;
+    for (row, dst_row) in cols.chunks_mut(b * area).enumerate() {
+        let ch = row / (g.kernel * g.kernel);
+        let (ky, kx) = ((row / g.kernel) % g.kernel, row % g.kernel);
+        let shift = (ky * w + kx) as isize - (g.padding * w + g.padding) as isize;
+        // dst[j] = src[j + shift] for j in lo..hi; outside, the kernel row is in the padding.
+        let lo = (-shift).clamp(0, area as isize) as usize;
+        let hi = (area as isize - shift).clamp(lo as isize, area as isize) as usize;
+        // Columns of each output row whose input column falls off the left or right edge.
+        let wrapped = if kx < g.padding {
+            0..(g.padding - kx).min(w)
+        } else {
+            w - (kx - g.padding).min(w)..w
+        };
+        for sample in 0..b {
+            let plane = &input[(sample * c + ch) * area..][..area];
+            let dst = &mut dst_row[sample * area..][..area];
+            dst[..lo].fill(0.0);
+            dst[hi..].fill(0.0);
+            let from = (lo as isize + shift) as usize;
+            dst[lo..hi].copy_from_slice(&plane[from..from + (hi - lo)]);
+            if !wrapped.is_empty() {
+                for line in dst.chunks_mut(w) {
+                    line[wrapped.clone()].fill(0.0);
                 }
             }
         }
@@ -366,21 +549,30 @@ fn channels_first(input: &[f32], [b, c, l]: [usize; 3], out: &mut [f32]) {
     }
 }
 
-/// Writes `product` [C, B·L] + bias, activated, into `out` [B, C, L].
+/// Writes `product` [C, B·L] + bias, activated, plus `residual` [B, C, L] where given, into
+/// `out` [B, C, L].
 fn write_back(
     product: &[f32],
     bias: &[f32],
     activation: Activation,
+    residual: Option<&[f32]>,
     [b, c, l]: [usize; 3],
     out: &mut [f32],
 ) {
     for sample in 0..b {
         for ch in 0..c {
             let src = &product[ch * b * l + sample * l..][..l];
-            let dst = &mut out[(sample * c + ch) * l..][..l];
+            let at = (sample * c + ch) * l;
+            let dst = &mut out[at..][..l];
             let bias = bias[ch];
             for (d, s) in dst.iter_mut().zip(src) {
-                *d = activation.apply(s + bias);
+                *d = s + bias;
+            }
+            activation.apply(dst);
+            if let Some(residual) = residual {
+                for (d, r) in dst.iter_mut().zip(&residual[at..][..l]) {
+                    *d += r;
+                }
             }
         }
     }
@@ -466,6 +658,7 @@ mod tests {
             (13, 4, 6, 5, 1, 1, 0),
             (2, 3, 4, 7, 3, 2, 0),
             (40, 6, 5, 4, 3, 1, 1),
+            (3, 4, 3, 6, 5, 1, 2),
             (2, 3, 2, 1, 3, 2, 1),
         ] {
             let x = random(&mut rng, [batch, cin, side, side + 1]);
@@ -478,16 +671,55 @@ mod tests {
             };
             let options = ConvOptions::new([stride; 2], [padding; 2], [1, 1], 1);
             let expected = conv2d(x.clone(), weight.clone(), Some(bias.clone()), options);
-            for activation in [Activation::Identity, Activation::Relu] {
+            for activation in [Activation::Identity, Activation::Relu, Activation::Elu] {
                 let expected = match activation {
                     Activation::Identity => expected.clone(),
                     Activation::Relu => burn::tensor::activation::relu(expected.clone()),
+                    Activation::Elu => burn::tensor::activation::elu(expected.clone(), 1.0),
                 };
                 let layer = GemmConv2d::new(weight.clone(), bias.clone(), geometry, activation);
                 let diff = max_abs_diff(layer.forward(x.clone()), expected);
                 assert!(diff < 1e-4, "batch {batch} k{kernel} s{stride}: {diff}");
             }
         }
+    }
+
+    #[test]
+    fn fused_input_activation_concatenation_and_residual_match_burn() {
+        let mut rng = NoiseRng::new(13);
+        for (batch, side) in [(1, 4), (7, 6)] {
+            let x = random(&mut rng, [batch, 3, side, side]);
+            let a = random(&mut rng, [batch, 2, side, side]);
+            let weight = random(&mut rng, [3, 5, 3, 3]);
+            let bias = random(&mut rng, [3]);
+            let geometry = ConvGeometry {
+                kernel: 3,
+                stride: 1,
+                padding: 1,
+            };
+            let options = ConvOptions::new([1, 1], [1, 1], [1, 1], 1);
+            let activated =
+                burn::tensor::activation::elu(Tensor::cat(vec![x.clone(), a.clone()], 1), 1.0);
+            let expected =
+                x.clone() + conv2d(activated, weight.clone(), Some(bias.clone()), options);
+            let layer = GemmConv2d::new(weight, bias, geometry, Activation::Identity);
+            let ours = layer.forward_fused(vec![x, a], Activation::Elu, true);
+            let diff = max_abs_diff(ours, expected);
+            assert!(diff < 1e-4, "batch {batch}: {diff}");
+        }
+    }
+
+    #[test]
+    fn exponential_of_non_positive_values_is_within_a_few_ulp() {
+        for i in 0..=86_000 {
+            let x = -(i as f32) * 1e-3;
+            let (ours, exact) = (exp_non_positive(x), x.exp());
+            assert!(
+                (ours - exact).abs() <= 4e-7 * exact,
+                "exp({x}) = {ours}, expected {exact}"
+            );
+        }
+        assert!(exp_non_positive(-200.0) < 1e-37);
     }
 
     #[test]

@@ -263,9 +263,7 @@ impl NormConv2d {
 
     /// Applies the layer to `x` [B, C_in, H, W].
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
-        if let Some(cache) = &self.cache
-            && !x.device().is_autodiff()
-        {
+        if let Some(cache) = self.lowered_for(&x, false, 0.0) {
             return cache.forward(x);
         }
         let out = conv2d(
@@ -298,6 +296,16 @@ impl NormConv2d {
     pub fn lowered(self) -> Self {
         let cache = Some(self.lower());
         Self { cache, ..self }
+    }
+
+    /// The lowered layer, where it may replace this one for `x`: on a non-autodiff device,
+    /// and where no dropout with probability `dropout` (drawn when `noisy`) comes between
+    /// the block's activation and this convolution.
+    fn lowered_for(&self, x: &Tensor<4>, noisy: bool, dropout: f64) -> Option<&GemmConv2d> {
+        let no_dropout = !noisy || dropout == 0.0;
+        self.cache
+            .as_ref()
+            .filter(|_| no_dropout && !x.device().is_autodiff())
     }
 }
 
@@ -343,6 +351,9 @@ impl ResBlock {
 
     /// Applies the block; `noise` drives dropout (None in eval).
     pub fn forward(&self, x: Tensor<4>, noise: Option<&mut NoiseRng>) -> Tensor<4> {
+        if let Some(conv) = self.conv2d.lowered_for(&x, noise.is_some(), self.dropout) {
+            return conv.forward_fused(vec![x], Activation::Elu, true);
+        }
         let h = dropout(elu(x.clone(), 1.0), self.dropout, noise);
         x + self.conv2d.forward(h)
     }
@@ -381,6 +392,13 @@ impl SkipResBlock {
 
     /// Applies the block to `x` with skip input `a`; `noise` drives dropout (None in eval).
     pub fn forward(&self, x: Tensor<4>, a: Tensor<4>, noise: Option<&mut NoiseRng>) -> Tensor<4> {
+        if let (Some(conv), Some(pre)) = (
+            self.conv2d.lowered_for(&x, noise.is_some(), self.dropout),
+            self.pre.lowered_for(&a, false, 0.0),
+        ) {
+            let a = pre.forward_fused(vec![a], Activation::Elu, false);
+            return conv.forward_fused(vec![x, a], Activation::Elu, true);
+        }
         let a = self.pre.forward(elu(a, 1.0));
         let h = Tensor::cat(vec![x.clone(), a], 1);
         let h = dropout(elu(h, 1.0), self.dropout, noise);

@@ -147,10 +147,18 @@ impl Up {
 
     /// Upsamples `x` and fuses it with the encoder feature `skip` (ignored without concat).
     pub fn forward(&self, x: Tensor<4>, skip: Tensor<4>) -> Tensor<4> {
-        let up = match &self.lowered {
-            Some(up) if !x.device().is_autodiff() => up.forward(x),
-            _ => self.up.forward(x),
-        };
+        if let (Some(up), Some([first, second])) = (&self.lowered, &self.double.lowered)
+            && !x.device().is_autodiff()
+        {
+            let up = up.forward(x);
+            let parts = if self.concat {
+                vec![skip, up]
+            } else {
+                vec![up]
+            };
+            return second.forward(first.forward_fused(parts, Activation::Identity, false));
+        }
+        let up = self.up.forward(x);
         let fused = if self.concat {
             Tensor::cat(vec![skip, up], 1)
         } else {
