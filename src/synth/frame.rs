@@ -160,7 +160,12 @@ fn antialias_edges(view: &FrameView, key: &[u32], part: &[u8], hdr: &mut [Rgb]) 
     let w = view.cam.width as usize;
     let h = view.cam.height_px as usize;
     // Parts count as separate surfaces so that kerb faces and vehicle parts are smoothed too.
-    let surface = |i: usize| key[i] ^ ((part[i] as u32) << 24);
+    let surfaces: Vec<u32> = key
+        .par_iter()
+        .zip(part)
+        .map(|(&k, &p)| k ^ ((p as u32) << 24))
+        .collect();
+    let surface = |i: usize| surfaces[i];
     let lum: Vec<f32> = hdr.par_iter().map(|c| c.luminance()).collect();
     let cam = &view.cam;
     hdr.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
