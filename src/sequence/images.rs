@@ -23,8 +23,8 @@ use super::palette;
 /// Filter used for every PNG we write. With the fast compressor, which codes runs of zero
 /// bytes cheaply, `Paeth` is the quickest in all (it leaves the most zeros, which more than
 /// pays for its own cost) and the smallest: on generated 768×512 frames it encodes a 16-bit
-/// flow in 70 % and a depth image in 45–70 % of the time `Up` takes, at 60 % and 15 % of the
-/// size, and RGB about as fast at 75 % of the size. The adaptive heuristic tries all five
+/// flow in 70–90 % and a depth image in 45–70 % of the time `Up` takes, at 60 % and 15 % of
+/// the size, and RGB about as fast at 75 % of the size. The adaptive heuristic tries all five
 /// filters per row and is slower.
 const PNG_FILTER: FilterType = FilterType::Paeth;
 
