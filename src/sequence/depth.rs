@@ -15,13 +15,16 @@ const MAX_CODE: f64 = 16_777_215.0;
 
 /// Encodes a depth in metres as CARLA's (R, G, B) bytes. Values outside [0, 1000] m are
 /// clamped; NaN encodes as 0.
+#[inline]
 pub fn depth_to_rgb(metres: f32) -> [u8; 3] {
-    let scaled = (f64::from(metres) / FAR_PLANE_M * MAX_CODE).round();
-    let code = if scaled.is_nan() {
-        0
-    } else {
-        scaled.clamp(0.0, MAX_CODE) as u32
-    };
+    // Rounded half away from zero by truncation, as `f64::round` does (which is a library
+    // call on baseline x86-64 and was most of the cost of a depth image). Clamped first, so
+    // the truncation is exact and so is `x - t`; NaN stays NaN and truncates to 0.
+    let x = (f64::from(metres) / FAR_PLANE_M * MAX_CODE).clamp(-1.0, MAX_CODE + 1.0);
+    let t = x as i64;
+    let frac = x - t as f64;
+    let rounded = t + i64::from(frac >= 0.5) - i64::from(frac <= -0.5);
+    let code = rounded.clamp(0, MAX_CODE as i64) as u32;
     [
         (code & 0xff) as u8,
         ((code >> 8) & 0xff) as u8,
@@ -41,7 +44,10 @@ pub fn encode_depth_image(width: u32, height: u32, metres: &[f32]) -> Option<Rgb
     if metres.len() != width as usize * height as usize {
         return None;
     }
-    let bytes: Vec<u8> = metres.iter().flat_map(|&m| depth_to_rgb(m)).collect();
+    let mut bytes = vec![0u8; 3 * metres.len()];
+    for (px, &m) in bytes.chunks_exact_mut(3).zip(metres) {
+        px.copy_from_slice(&depth_to_rgb(m));
+    }
     RgbImage::from_raw(width, height, bytes)
 }
 
@@ -64,6 +70,31 @@ mod tests {
         assert_eq!(depth_to_rgb(5000.0), [255, 255, 255]);
         assert_eq!(depth_to_rgb(-3.0), [0, 0, 0]);
         assert_eq!(depth_to_rgb(f32::NAN), [0, 0, 0]);
+    }
+
+    #[test]
+    fn depth_codes_round_like_f64_round() {
+        let reference = |m: f32| {
+            let scaled = (f64::from(m) / FAR_PLANE_M * MAX_CODE).round();
+            let code = if scaled.is_nan() {
+                0
+            } else {
+                scaled.clamp(0.0, MAX_CODE) as u32
+            };
+            [code as u8, (code >> 8) as u8, (code >> 16) as u8]
+        };
+        let mut values = vec![f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.0, -0.0, 1e30];
+        // Depths spread over every binade up to 1001 m (by bit pattern), and the f32 depths
+        // nearest to the ties between codes with their neighbours.
+        let up_to = 1001.0f32.to_bits();
+        values.extend((0..up_to).step_by(9973).map(f32::from_bits));
+        for k in (0..16_777_215u32).step_by(251) {
+            let tie = ((f64::from(k) + 0.5) * FAR_PLANE_M / MAX_CODE) as f32;
+            values.extend([tie, tie.next_up(), tie.next_down()]);
+        }
+        for m in values {
+            assert_eq!(depth_to_rgb(m), reference(m), "{m:e}");
+        }
     }
 
     #[test]

@@ -141,23 +141,27 @@ pub fn encode_kitti_png(path: &Path, flow: &FlowField) -> Result<Vec<u8>, Sequen
     let width = flow.width as usize;
     let mut bytes = vec![0u8; 6 * width * flow.height as usize];
     let unknown = [kitti_code(0.0), kitti_code(0.0), 0];
+    let row_len = width.max(1);
+    // Row by row over fixed-size pixel chunks, so that no access needs a bounds check.
     bytes
-        .par_chunks_mut(6 * width.max(1))
+        .par_chunks_mut(6 * row_len)
+        .zip(flow.uv.par_chunks(2 * row_len))
         .enumerate()
-        .for_each(|(y, row)| {
-            for (x, px) in row.chunks_exact_mut(6).enumerate() {
-                let i = y * width + x;
-                let channels = if flow.is_usable(i) {
-                    [
-                        kitti_code(flow.uv[2 * i]),
-                        kitti_code(flow.uv[2 * i + 1]),
-                        1,
-                    ]
+        .for_each(|(y, (row, uv_row))| {
+            let valid = flow
+                .valid
+                .as_deref()
+                .map(|v| &v[y * width..(y + 1) * width]);
+            let pixels = row.as_chunks_mut::<6>().0.iter_mut();
+            for (x, (px, &[u, v])) in pixels.zip(uv_row.as_chunks::<2>().0).enumerate() {
+                let usable = valid.is_none_or(|valid| valid[x]) && u.is_finite() && v.is_finite();
+                let channels = if usable {
+                    [kitti_code(u), kitti_code(v), 1]
                 } else {
                     unknown
                 };
-                for (out, channel) in px.chunks_exact_mut(2).zip(channels) {
-                    out.copy_from_slice(&channel.to_ne_bytes());
+                for (out, channel) in px.as_chunks_mut::<2>().0.iter_mut().zip(channels) {
+                    *out = channel.to_ne_bytes();
                 }
             }
         });

@@ -20,9 +20,13 @@ use super::SequenceError;
 use super::depth::{DepthMap, decode_depth_image};
 use super::palette;
 
-/// Filter used for every PNG we write. `Up` costs one subtraction per byte and compresses
-/// camera-like images nearly as well as the adaptive heuristic, which tries all five.
-const PNG_FILTER: FilterType = FilterType::Up;
+/// Filter used for every PNG we write. With the fast compressor, which codes runs of zero
+/// bytes cheaply, `Paeth` is the quickest in all (it leaves the most zeros, which more than
+/// pays for its own cost) and the smallest: on generated 768×512 frames it encodes a 16-bit
+/// flow in 70–90 % and a depth image in 45–70 % of the time `Up` takes, at 60 % and 15 % of
+/// the size, and RGB about as fast at 75 % of the size. The adaptive heuristic tries all five
+/// filters per row and is slower.
+const PNG_FILTER: FilterType = FilterType::Paeth;
 
 /// Encodes raw pixel bytes as a PNG with fast compression. 16-bit layouts take native-endian
 /// bytes, as `image`'s encoder expects.

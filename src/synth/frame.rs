@@ -42,80 +42,109 @@ pub struct Shading {
     pub id: Vec<u16>,
 }
 
-#[derive(Clone, Copy, Default)]
-struct Px {
-    key: u32,
-    part: u8,
-    depth: f32,
-    point: V3,
-    rgb: Rgb,
-    semantic: u8,
-    tag: u8,
-    id: u16,
+/// One band of `TILE` image rows of every per-pixel output of [`cast`] (the shading slices
+/// are empty without shading).
+struct Band<'a> {
+    key: &'a mut [u32],
+    part: &'a mut [u8],
+    depth: &'a mut [f32],
+    point: &'a mut [V3],
+    rgb: &'a mut [Rgb],
+    semantic: &'a mut [u8],
+    tag: &'a mut [u8],
+    id: &'a mut [u16],
 }
 
 /// Ray-casts every pixel of `view`; shades them too when `with_shading`.
 pub fn cast(view: &FrameView, with_shading: bool) -> (GBuffer, Option<Shading>) {
     let w = view.cam.width as usize;
     let h = view.cam.height_px as usize;
-    let mut px = vec![Px::default(); w * h];
+    let n = w * h;
+    let shaded = if with_shading { n } else { 0 };
+    let mut key = vec![0u32; n];
+    let mut part = vec![0u8; n];
+    let mut depth = vec![0.0f32; n];
+    let mut point = vec![V3::default(); n];
+    let mut hdr = vec![Rgb::BLACK; shaded];
+    let mut semantic = vec![0u8; shaded];
+    let mut tag = vec![0u8; shaded];
+    let mut id = vec![0u16; shaded];
+    // Each output is written in place, band by band, rather than gathered from a buffer of
+    // whole pixel records afterwards.
+    let rows = w * TILE;
+    let (mut rgb_bands, mut semantic_bands) = (hdr.chunks_mut(rows), semantic.chunks_mut(rows));
+    let (mut tag_bands, mut id_bands) = (tag.chunks_mut(rows), id.chunks_mut(rows));
+    let bands: Vec<Band> = key
+        .chunks_mut(rows)
+        .zip(part.chunks_mut(rows))
+        .zip(depth.chunks_mut(rows))
+        .zip(point.chunks_mut(rows))
+        .map(|(((key, part), depth), point)| Band {
+            key,
+            part,
+            depth,
+            point,
+            rgb: rgb_bands.next().unwrap_or_default(),
+            semantic: semantic_bands.next().unwrap_or_default(),
+            tag: tag_bands.next().unwrap_or_default(),
+            id: id_bands.next().unwrap_or_default(),
+        })
+        .collect();
     let cam = &view.cam;
     let tiles_x = w.div_ceil(TILE);
-    px.par_chunks_mut(w * TILE)
-        .enumerate()
-        .for_each(|(band, rows)| {
-            let band_rows = rows.len() / w;
-            // Tile by tile, so that each tile's primitive list is fetched once and the
-            // previous pixel's ground point seeds the Frenet inversion of the next.
-            for tx in 0..tiles_x {
-                let tile = band * tiles_x + tx;
-                let x_end = ((tx + 1) * TILE).min(w);
-                for r in 0..band_rows {
-                    let y = band * TILE + r;
-                    let mut s_hint = None;
-                    for x in tx * TILE..x_end {
-                        let out = &mut rows[r * w + x];
-                        let (u, v) = (x as f32 + 0.5, y as f32 + 0.5);
-                        let dir = cam.ray(u, v);
-                        let hit = view.trace_in_tile(dir, u, v, tile, s_hint);
-                        s_hint = (hit.key == KEY_GROUND).then_some(hit.local.x);
-                        out.key = hit.key;
-                        out.part = hit.part;
-                        out.depth = hit.t;
-                        out.point = match hit.key {
-                            KEY_SKY | KEY_BACKDROP => dir,
-                            k if k & KEY_VEHICLE != 0 => hit.local,
-                            _ => {
-                                let p = cam.origin() + dir * hit.t;
-                                V3::new(cam.x + p.x, cam.y + p.y, p.z)
-                            }
-                        };
-                        if with_shading {
-                            let s = shade::shade(view, &hit, dir, tile);
-                            out.rgb = s.rgb;
-                            out.semantic = s.semantic;
-                            out.tag = s.tag;
-                            out.id = s.id;
+    bands.into_par_iter().enumerate().for_each(|(band, out)| {
+        let band_rows = out.key.len() / w;
+        // Tile by tile, so that each tile's primitive list is fetched once and the previous
+        // pixel's ground point seeds the Frenet inversion of the next.
+        for tx in 0..tiles_x {
+            let tile = band * tiles_x + tx;
+            let x_end = ((tx + 1) * TILE).min(w);
+            for r in 0..band_rows {
+                let y = band * TILE + r;
+                let mut s_hint = None;
+                for x in tx * TILE..x_end {
+                    let i = r * w + x;
+                    let (u, v) = (x as f32 + 0.5, y as f32 + 0.5);
+                    let dir = cam.ray(u, v);
+                    let hit = view.trace_in_tile(dir, u, v, tile, s_hint);
+                    s_hint = (hit.key == KEY_GROUND).then_some(hit.local.x);
+                    out.key[i] = hit.key;
+                    out.part[i] = hit.part;
+                    out.depth[i] = hit.t;
+                    out.point[i] = match hit.key {
+                        KEY_SKY | KEY_BACKDROP => dir,
+                        k if k & KEY_VEHICLE != 0 => hit.local,
+                        _ => {
+                            let p = cam.origin() + dir * hit.t;
+                            V3::new(cam.x + p.x, cam.y + p.y, p.z)
                         }
+                    };
+                    if with_shading {
+                        let s = shade::shade(view, &hit, dir, tile);
+                        out.rgb[i] = s.rgb;
+                        out.semantic[i] = s.semantic;
+                        out.tag[i] = s.tag;
+                        out.id[i] = s.id;
                     }
                 }
             }
-        });
+        }
+    });
     if with_shading {
-        antialias_edges(view, &mut px);
+        antialias_edges(view, &key, &part, &mut hdr);
     }
     let gbuf = GBuffer {
         width: w,
         height: h,
-        key: px.par_iter().map(|p| p.key).collect(),
-        depth: px.par_iter().map(|p| p.depth).collect(),
-        point: px.par_iter().map(|p| p.point).collect(),
+        key,
+        depth,
+        point,
     };
-    let shading = with_shading.then(|| Shading {
-        hdr: px.par_iter().map(|p| p.rgb).collect(),
-        semantic: px.par_iter().map(|p| p.semantic).collect(),
-        tag: px.par_iter().map(|p| p.tag).collect(),
-        id: px.par_iter().map(|p| p.id).collect(),
+    let shading = with_shading.then_some(Shading {
+        hdr,
+        semantic,
+        tag,
+        id,
     });
     (gbuf, shading)
 }
@@ -127,23 +156,25 @@ const EDGE_SAMPLES: [(f32, f32); 2] = [(-0.25, -0.25), (0.25, 0.25)];
 /// Re-shades pixels on object boundaries with two extra samples and averages them with the
 /// centre sample, so that silhouettes are anti-aliased. Labels, depth and geometry keep the
 /// centre sample.
-fn antialias_edges(view: &FrameView, px: &mut [Px]) {
+fn antialias_edges(view: &FrameView, key: &[u32], part: &[u8], hdr: &mut [Rgb]) {
     let w = view.cam.width as usize;
     let h = view.cam.height_px as usize;
     // Parts count as separate surfaces so that kerb faces and vehicle parts are smoothed too.
-    let keys: Vec<u32> = px
+    let surfaces: Vec<u32> = key
         .par_iter()
-        .map(|p| p.key ^ ((p.part as u32) << 24))
+        .zip(part)
+        .map(|(&k, &p)| k ^ ((p as u32) << 24))
         .collect();
-    let lum: Vec<f32> = px.par_iter().map(|p| p.rgb.luminance()).collect();
+    let surface = |i: usize| surfaces[i];
+    let lum: Vec<f32> = hdr.par_iter().map(|c| c.luminance()).collect();
     let cam = &view.cam;
-    px.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+    hdr.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         for (x, out) in row.iter_mut().enumerate() {
             let i = y * w + x;
-            let (k, l) = (keys[i], lum[i]);
+            let (k, l) = (surface(i), lum[i]);
             // Only boundaries that show: another surface with a visibly different brightness.
             let visible =
-                |j: usize| keys[j] != k && (lum[j] - l).abs() > 0.04 * (lum[j] + l) + 0.002;
+                |j: usize| surface(j) != k && (lum[j] - l).abs() > 0.04 * (lum[j] + l) + 0.002;
             let edge = (x > 0 && visible(i - 1))
                 || (x + 1 < w && visible(i + 1))
                 || (y > 0 && visible(i - w))
@@ -151,7 +182,7 @@ fn antialias_edges(view: &FrameView, px: &mut [Px]) {
             if !edge {
                 continue;
             }
-            let mut sum = out.rgb;
+            let mut sum = *out;
             for (dx, dy) in EDGE_SAMPLES {
                 let (u, v) = (x as f32 + 0.5 + dx, y as f32 + 0.5 + dy);
                 let dir = cam.ray(u, v);
@@ -159,7 +190,7 @@ fn antialias_edges(view: &FrameView, px: &mut [Px]) {
                 let hit = view.trace_in_tile(dir, u, v, tile, None);
                 sum += shade::shade(view, &hit, dir, tile).rgb;
             }
-            out.rgb = sum * (1.0 / (1 + EDGE_SAMPLES.len()) as f32);
+            *out = sum * (1.0 / (1 + EDGE_SAMPLES.len()) as f32);
         }
     });
 }

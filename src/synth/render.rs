@@ -53,7 +53,13 @@ pub struct Prim {
     pub rect: [f32; 4],
     /// The camera's ray origin in the primitive's local frame (the same for every ray).
     pub eye: V3,
+    /// The part of the object's local x extent this primitive stands for: panels are split
+    /// into pieces of at most [`PANEL_PIECE`] so that each piece gets tight screen bounds.
+    pub x_range: (f32, f32),
 }
+
+/// Longest piece of a panel that is binned as one primitive (m).
+const PANEL_PIECE: f32 = 4.0;
 
 impl Prim {
     /// Object key for flow and occlusion tests.
@@ -159,8 +165,19 @@ pub struct FrameView<'w> {
     pub shadow_step: Option<(f32, f32)>,
 }
 
-/// Screen rectangle of a set of camera-relative points, or `None` if all are behind, and
-/// the smallest depth of the points (0 if some are behind the camera).
+/// Depth of the plane at which bounds that cross the camera plane are cut: nothing the camera
+/// sees comes within a millimetre of it.
+const CLIP_DEPTH: f32 = 1e-3;
+
+/// Screen rectangle of the convex hull of a set of camera-relative points, or `None` if all
+/// are behind the camera, and the smallest depth of the hull's visible part (exactly
+/// [`CLIP_DEPTH`] for a hull that crosses the camera plane).
+///
+/// A hull that crosses the camera plane is cut at [`CLIP_DEPTH`] and bounded by what lies
+/// in front: its own points there and the points where its edges meet the cutting plane
+/// (every pair of a point in front and one behind, a superset of the hull's edges). Such
+/// hulls are the walls, guard rails and parked cars right beside the camera; bounding them
+/// by the whole image would make every pixel test them.
 fn screen_rect(cam: &Camera, pts: &[V3]) -> Option<([f32; 4], f32)> {
     let mut r = [
         f32::INFINITY,
@@ -186,10 +203,46 @@ fn screen_rect(cam: &Camera, pts: &[V3]) -> Option<([f32; 4], f32)> {
         return None;
     }
     if behind > 0 {
-        // Straddles the camera plane: be conservative.
-        return Some(([0.0, 0.0, cam.width as f32, cam.height_px as f32], 0.0));
+        return Some((clipped_rect(cam, pts), CLIP_DEPTH));
     }
     Some(([r[0] - 1.0, r[1] - 1.0, r[2] + 1.0, r[3] + 1.0], near))
+}
+
+/// [`screen_rect`] of a hull that crosses the camera plane: the bounds of its part in front
+/// of the plane at [`CLIP_DEPTH`].
+fn clipped_rect(cam: &Camera, pts: &[V3]) -> [f32; 4] {
+    let depth = |p: V3| p.x * cam.c + p.y * cam.s;
+    let mut r = [
+        f32::INFINITY,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NEG_INFINITY,
+    ];
+    let mut add = |p: V3| {
+        // The projection of `Camera::project_relative` without its near limit; points on
+        // the cutting plane may land far outside the image, which binning clamps.
+        let z = depth(p).max(CLIP_DEPTH);
+        let u = cam.cx + cam.fx * (p.x * cam.s - p.y * cam.c) / z;
+        let v = cam.cy - cam.fy * (p.z - cam.height) / z;
+        r[0] = r[0].min(u);
+        r[1] = r[1].min(v);
+        r[2] = r[2].max(u);
+        r[3] = r[3].max(v);
+    };
+    for &a in pts {
+        let za = depth(a);
+        if za < CLIP_DEPTH {
+            continue;
+        }
+        add(a);
+        for &b in pts {
+            let zb = depth(b);
+            if zb < CLIP_DEPTH {
+                add(a + (b - a) * ((za - CLIP_DEPTH) / (za - zb)));
+            }
+        }
+    }
+    [r[0] - 1.0, r[1] - 1.0, r[2] + 1.0, r[3] + 1.0]
 }
 
 /// Whether a screen rectangle overlaps a `w × h` image.
@@ -214,6 +267,10 @@ fn box_corners(origin: V3, c: f32, s: f32, lo: V3, hi: V3) -> [V3; 8] {
 fn bin(rects: &[[f32; 4]], tiles_x: usize, tiles_y: usize) -> (Vec<u32>, Vec<u32>) {
     let n_tiles = tiles_x * tiles_y;
     let span = |r: &[f32; 4]| {
+        // Left of or above the image (cut bounds can be): no tiles.
+        if r[2] < 0.0 || r[3] < 0.0 {
+            return (1, 1, 0, 0);
+        }
         let tx0 = (r[0] / TILE as f32).floor().max(0.0) as usize;
         let ty0 = (r[1] / TILE as f32).floor().max(0.0) as usize;
         let tx1 = ((r[2] / TILE as f32).floor().max(0.0) as usize).min(tiles_x - 1);
@@ -274,19 +331,40 @@ impl<'w> FrameView<'w> {
             let origin = cam.relative(obj.pos);
             let (c, s) = (obj.yaw.cos(), obj.yaw.sin());
             let (lo, hi) = obj.local_bounds();
-            if let Some((r, near)) = screen_rect(&cam, &box_corners(origin, c, s, lo, hi))
-                && on_screen(&r, w, h)
-            {
-                prims.push(Prim {
-                    what: PrimRef::Static(i as u32),
+            // Guard rails and tree lines run for tens of metres; as one primitive their
+            // bounds would cover a wide wedge of the image that they mostly miss.
+            let pieces = match obj.shape {
+                Shape::Panel { hx, .. } => (2.0 * hx / PANEL_PIECE).ceil().max(1.0) as usize,
+                _ => 1,
+            };
+            let cut = |k: usize| lo.x + (hi.x - lo.x) * (k as f32 / pieces as f32);
+            for k in 0..pieces {
+                let x0 = if k == 0 { lo.x } else { cut(k) };
+                let x1 = if k + 1 == pieces { hi.x } else { cut(k + 1) };
+                let corners = box_corners(
                     origin,
                     c,
                     s,
-                    near,
-                    rect: r,
-                    eye: (cam.origin() - origin).unrotate_z(c, s),
-                });
-                rects.push(r);
+                    V3::new(x0, lo.y, lo.z),
+                    V3::new(x1, hi.y, hi.z),
+                );
+                // What crosses the camera plane is kept even when out of sight, as before the
+                // bounds were cut: the frame's lights and glows are drawn from these.
+                if let Some((r, near)) = screen_rect(&cam, &corners)
+                    && (near == CLIP_DEPTH || on_screen(&r, w, h))
+                {
+                    prims.push(Prim {
+                        what: PrimRef::Static(i as u32),
+                        origin,
+                        c,
+                        s,
+                        near,
+                        rect: r,
+                        eye: (cam.origin() - origin).unrotate_z(c, s),
+                        x_range: (x0, x1),
+                    });
+                    rects.push(r);
+                }
             }
         }
         for (i, v) in world.traffic.vehicles.iter().enumerate() {
@@ -325,8 +403,30 @@ impl<'w> FrameView<'w> {
             {
                 pts.push(*p);
             }
-            if let Some((r, near)) = screen_rect(&cam, &pts)
-                && on_screen(&r, w, h)
+            let mut bounds = screen_rect(&cam, &pts);
+            if bounds.is_some_and(|(_, near)| near == CLIP_DEPTH) {
+                // Beside the camera the bounds are cut rather than the whole image, so they
+                // must hold every ground point the vehicle darkens: raised sidewalks too, and
+                // the whole contact shadow, which fades out 0.69 m beyond the footprint.
+                let kerb = world.road.kerb_height;
+                let on_ground = pts[8..].to_vec();
+                for z in [0.0, kerb] {
+                    let fringe = box_corners(
+                        origin,
+                        c,
+                        s,
+                        V3::new(lo.x - 0.7, lo.y - 0.7, z),
+                        V3::new(hi.x + 0.7, hi.y + 0.7, z),
+                    );
+                    pts.extend_from_slice(&fringe[..4]);
+                    pts.extend(on_ground.iter().map(|p| V3::new(p.x, p.y, z)));
+                }
+                bounds = screen_rect(&cam, &pts);
+            }
+            // Kept beside the camera even when out of sight (see the static objects): its
+            // headlights still light the road ahead at night.
+            if let Some((r, near)) = bounds
+                && (near == CLIP_DEPTH || on_screen(&r, w, h))
             {
                 prims.push(Prim {
                     what: PrimRef::Vehicle(i as u32),
@@ -336,6 +436,7 @@ impl<'w> FrameView<'w> {
                     near,
                     rect: body_rect,
                     eye: (cam.origin() - origin).unrotate_z(c, s),
+                    x_range: (lo.x, hi.x),
                 });
                 rects.push(r);
             }
@@ -543,9 +644,13 @@ impl<'w> FrameView<'w> {
             let ol = prim.eye;
             let dl = dir.unrotate_z(prim.c, prim.s);
             let found = match prim.what {
-                PrimRef::Static(i) => {
-                    intersect_static(&self.world.scenery.objects[i as usize], ol, dl, hit.t)
-                }
+                PrimRef::Static(i) => intersect_static(
+                    &self.world.scenery.objects[i as usize],
+                    prim.x_range,
+                    ol,
+                    dl,
+                    hit.t,
+                ),
                 PrimRef::Vehicle(i) => intersect_vehicle(
                     &self.world.traffic.vehicles[i as usize].model,
                     ol,
@@ -654,8 +759,15 @@ fn slab(o: V3, d: V3, lo: V3, hi: V3, t_max: f32) -> Option<(f32, V3)> {
     }
 }
 
-/// Ray-static-object intersection in object-local coordinates.
-pub fn intersect_static(obj: &StaticObject, o: V3, d: V3, t_max: f32) -> Option<(f32, u8, V3)> {
+/// Ray-static-object intersection in object-local coordinates; a panel is only hit within
+/// `x_range`.
+pub fn intersect_static(
+    obj: &StaticObject,
+    x_range: (f32, f32),
+    o: V3,
+    d: V3,
+    t_max: f32,
+) -> Option<(f32, u8, V3)> {
     match obj.shape {
         Shape::Box { hx, hy, z0, z1 } => {
             slab(o, d, V3::new(-hx, -hy, z0), V3::new(hx, hy, z1), t_max).map(|(t, n)| (t, 0, n))
@@ -702,7 +814,7 @@ pub fn intersect_static(obj: &StaticObject, o: V3, d: V3, t_max: f32) -> Option<
             let n = V3::new(p.x / (rx * rx), p.y / (ry * ry), (p.z - zc) / (rz * rz)).normalized();
             Some((t, 0, n))
         }
-        Shape::Panel { hx, h } => {
+        Shape::Panel { h, .. } => {
             if d.y.abs() < 1e-9 {
                 return None;
             }
@@ -712,7 +824,7 @@ pub fn intersect_static(obj: &StaticObject, o: V3, d: V3, t_max: f32) -> Option<
             }
             let x = o.x + t * d.x;
             let z = o.z + t * d.z;
-            if x.abs() > hx || z < 0.0 || z > h {
+            if x < x_range.0 || x > x_range.1 || z < 0.0 || z > h {
                 return None;
             }
             if !panel_solid(obj, x, z) {

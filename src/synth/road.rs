@@ -20,9 +20,20 @@ const STEP: f32 = 1.0;
 #[derive(Debug, Clone)]
 pub struct Centerline {
     s_start: f32,
-    points: Vec<[f32; 2]>,
-    tangents: Vec<[f32; 2]>,
-    curvature: Vec<f32>,
+    /// One sample per metre, position, tangent and curvature side by side, so that an
+    /// interpolation reads its two neighbours from one place (the ground of every pixel is
+    /// sampled several times).
+    knots: Vec<Knot>,
+}
+
+/// A tabulated sample of the centreline: position, unit tangent and curvature.
+#[derive(Debug, Clone, Copy)]
+struct Knot {
+    x: f32,
+    y: f32,
+    tx: f32,
+    ty: f32,
+    kappa: f32,
 }
 
 /// A point of the centreline with its unit tangent and curvature.
@@ -71,16 +82,18 @@ impl Centerline {
             k
         };
         let n = ((s_end - s_start) / STEP).ceil() as usize + 2;
-        let mut points = Vec::with_capacity(n);
-        let mut tangents = Vec::with_capacity(n);
-        let mut curvature = Vec::with_capacity(n);
+        let mut knots = Vec::with_capacity(n);
         let (mut x, mut y, mut theta) = (0.0f64, 0.0f64, 0.0f64);
         const SUB: usize = 8;
         for i in 0..n {
             let s_i = s_start + i as f32 * STEP;
-            points.push([x as f32, y as f32]);
-            tangents.push([theta.cos() as f32, theta.sin() as f32]);
-            curvature.push(target(s_i));
+            knots.push(Knot {
+                x: x as f32,
+                y: y as f32,
+                tx: theta.cos() as f32,
+                ty: theta.sin() as f32,
+                kappa: target(s_i),
+            });
             let h = (STEP / SUB as f32) as f64;
             for j in 0..SUB {
                 let k = target(s_i + (j as f32 + 0.5) * h as f32) as f64;
@@ -90,12 +103,7 @@ impl Centerline {
                 theta += k * h;
             }
         }
-        Self {
-            s_start,
-            points,
-            tangents,
-            curvature,
-        }
+        Self { s_start, knots }
     }
 
     /// First tabulated arc length.
@@ -105,42 +113,40 @@ impl Centerline {
 
     /// Last tabulated arc length.
     pub fn s_end(&self) -> f32 {
-        self.s_start + (self.points.len().saturating_sub(1)) as f32 * STEP
+        self.s_start + (self.knots.len().saturating_sub(1)) as f32 * STEP
     }
 
     /// Position, tangent and curvature at arc length `s` (straight extrapolation outside).
     #[inline]
     pub fn sample(&self, s: f32) -> CenterSample {
-        let last = self.points.len() - 1;
+        let last = self.knots.len() - 1;
         let u = (s - self.s_start) / STEP;
         if u <= 0.0 || u >= last as f32 {
             let i = if u <= 0.0 { 0 } else { last };
             let delta = s - (self.s_start + i as f32 * STEP);
-            let [tx, ty] = self.tangents[i];
-            let [px, py] = self.points[i];
+            let k = self.knots[i];
             return CenterSample {
-                x: px + tx * delta,
-                y: py + ty * delta,
-                tx,
-                ty,
+                x: k.x + k.tx * delta,
+                y: k.y + k.ty * delta,
+                tx: k.tx,
+                ty: k.ty,
                 kappa: 0.0,
             };
         }
-        let i = (u as usize).min(last - 1);
+        // 0 < u < last here, so the conversion needs no saturation (`as usize` would test
+        // for it); `min` keeps the pair inside the table all the same.
+        let i = (u as u32 as usize).min(last - 1);
         let f = u - i as f32;
-        let [p0x, p0y] = self.points[i];
-        let [p1x, p1y] = self.points[i + 1];
-        let [t0x, t0y] = self.tangents[i];
-        let [t1x, t1y] = self.tangents[i + 1];
+        let [k0, k1] = [self.knots[i], self.knots[i + 1]];
         // Linear between samples 1 m apart: the chord deviates from the arc by well under a
         // millimetre for the gentle curvatures used, and the tangent is interpolated
         // separately so that Frenet offsets stay continuous.
         CenterSample {
-            x: p0x + (p1x - p0x) * f,
-            y: p0y + (p1y - p0y) * f,
-            tx: t0x + (t1x - t0x) * f,
-            ty: t0y + (t1y - t0y) * f,
-            kappa: self.curvature[i] + (self.curvature[i + 1] - self.curvature[i]) * f,
+            x: k0.x + (k1.x - k0.x) * f,
+            y: k0.y + (k1.y - k0.y) * f,
+            tx: k0.tx + (k1.tx - k0.tx) * f,
+            ty: k0.ty + (k1.ty - k0.ty) * f,
+            kappa: k0.kappa + (k1.kappa - k0.kappa) * f,
         }
     }
 
