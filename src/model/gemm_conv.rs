@@ -88,6 +88,16 @@ pub struct ConvGeometry {
 }
 
 impl ConvGeometry {
+    /// Panics unless a `layer`'s weight of kernel `kh`×`kw` has this geometry's kernel: the
+    /// lowering is set up once per layer from the model's own modules.
+    fn expect_kernel(&self, [kh, kw]: [usize; 2], layer: &str) {
+        assert!(
+            kh == self.kernel && kw == self.kernel,
+            "{layer}: a {kh}×{kw} kernel does not match the geometry's {}",
+            self.kernel
+        );
+    }
+
     fn output_side(&self, input: usize) -> usize {
         (input + 2 * self.padding - self.kernel) / self.stride + 1
     }
@@ -114,11 +124,7 @@ impl GemmConv2d {
         activation: Activation,
     ) -> Self {
         let [cout, cin, kh, kw] = weight.dims();
-        assert!(
-            kh == geometry.kernel && kw == geometry.kernel,
-            "GemmConv2d: a {kh}×{kw} kernel does not match the geometry's {}",
-            geometry.kernel
-        );
+        geometry.expect_kernel([kh, kw], "GemmConv2d");
         Self {
             weight: values(weight),
             bias: values(bias),
@@ -310,11 +316,7 @@ impl GemmConvTranspose2d {
         out_padding: usize,
     ) -> Self {
         let [cin, cout, kh, kw] = weight.dims();
-        assert!(
-            kh == geometry.kernel && kw == geometry.kernel,
-            "GemmConvTranspose2d: a {kh}×{kw} kernel does not match the geometry's {}",
-            geometry.kernel
-        );
+        geometry.expect_kernel([kh, kw], "GemmConvTranspose2d");
         let weight = weight.reshape([cin, cout * kh * kw]).transpose();
         Self {
             weight: values(weight),
