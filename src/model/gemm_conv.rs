@@ -11,12 +11,19 @@
 //!
 //! These layers hold plain `f32` buffers, not trainable parameters: they serve inference on
 //! non-autodiff devices only and are rebuilt from the module whenever weights change.
+//!
+//! The memory modules' addressing product Q·Mᵀ ([`memory_scores`]) is here too: asked for in
+//! the orientation burn asks for it, gemm copies the whole memory matrix on every read.
+
+mod winograd;
 
 use std::cell::RefCell;
 
 use burn::tensor::{Tensor, TensorData};
 use burn_flex::{Flex, FlexTensor};
 use rayon::prelude::*;
+
+use winograd::{OutputStage, WinogradKernel};
 
 /// About how many values one tile's unfolded input holds (4 MiB): large enough that the
 /// GEMM amortises its packing, small enough to stay in a core's cache hierarchy.
@@ -37,6 +44,7 @@ pub enum Activation {
 impl Activation {
     /// Applies the activation to every value of `values`; the match sits outside the loops
     /// so each one vectorises.
+    #[inline(always)]
     fn apply(self, values: &mut [f32]) {
         match self {
             Self::Identity => {}
@@ -113,6 +121,8 @@ pub struct GemmConv2d {
     cout: usize,
     geometry: ConvGeometry,
     activation: Activation,
+    /// The kernels in the Winograd domain, for 3×3 stride-1 "same" layers wide enough.
+    winograd: Option<WinogradKernel>,
 }
 
 impl GemmConv2d {
@@ -125,13 +135,23 @@ impl GemmConv2d {
     ) -> Self {
         let [cout, cin, kh, kw] = weight.dims();
         geometry.expect_kernel([kh, kw], "GemmConv2d");
+        let weight = values(weight);
+        let same_3x3 = geometry
+            == ConvGeometry {
+                kernel: 3,
+                stride: 1,
+                padding: 1,
+            };
+        let winograd = (same_3x3 && cin >= winograd::MIN_CHANNELS)
+            .then(|| WinogradKernel::new(&weight, cout, cin));
         Self {
-            weight: values(weight),
+            weight,
             bias: values(bias),
             cin,
             cout,
             geometry,
             activation,
+            winograd,
         }
     }
 
@@ -165,8 +185,35 @@ impl GemmConv2d {
             );
             values.as_slice()
         });
-        let k = self.cin * g.kernel * g.kernel;
         let out_len = self.cout * oh * ow;
+        if let Some(kernel) = self
+            .winograd
+            .as_ref()
+            .filter(|_| WinogradKernel::fits(h, w))
+        {
+            let per_tile = samples_per_tile(kernel.values_per_sample(h, w), batch);
+            let mut out = vec![0.0f32; batch * out_len];
+            let run_tile = |(tile, out): (usize, &mut [f32]), parallelism: gemm::Parallelism| {
+                let first = tile * per_tile;
+                let samples = out.len() / out_len;
+                let stage = OutputStage {
+                    bias: &self.bias,
+                    activation: self.activation,
+                    residual: residual.map(|r| &r[first * out_len..(first + samples) * out_len]),
+                    out,
+                };
+                kernel.convolve(
+                    |sample, channel| input.plane(first + sample, channel),
+                    input_activation,
+                    [samples, h, w],
+                    stage,
+                    parallelism,
+                );
+            };
+            run_tiles(&mut out, per_tile * out_len, run_tile);
+            return tensor(out, [batch, self.cout, oh, ow], &device);
+        }
+        let k = self.cin * g.kernel * g.kernel;
         let per_tile = samples_per_tile(k * oh * ow, batch);
         let mut out = vec![0.0f32; batch * out_len];
         let run_tile = |(tile, out): (usize, &mut [f32]), parallelism: gemm::Parallelism| {
@@ -177,8 +224,13 @@ impl GemmConv2d {
             with_scratch(staged + k * cols_n + self.cout * cols_n, |scratch| {
                 let (staging, rest) = scratch.split_at_mut(staged);
                 let (cols, product) = rest.split_at_mut(k * cols_n);
-                let source = input.tile(first, samples, input_activation, staging);
-                im2col(source, [samples, self.cin, h, w], g, [oh, ow], cols);
+                vectorised(
+                    #[inline(always)]
+                    || {
+                        let source = input.tile(first, samples, input_activation, staging);
+                        im2col(source, [samples, self.cin, h, w], g, [oh, ow], cols);
+                    },
+                );
                 // SAFETY: every slice is as long as the dimensions and strides describe.
                 unsafe {
                     matmul(
@@ -190,13 +242,18 @@ impl GemmConv2d {
                     )
                 };
                 let residual = residual.map(|r| &r[first * out_len..(first + samples) * out_len]);
-                write_back(
-                    product,
-                    &self.bias,
-                    self.activation,
-                    residual,
-                    [samples, self.cout, oh * ow],
-                    out,
+                vectorised(
+                    #[inline(always)]
+                    || {
+                        write_back(
+                            product,
+                            &self.bias,
+                            self.activation,
+                            residual,
+                            [samples, self.cout, oh * ow],
+                            out,
+                        )
+                    },
                 );
             });
         };
@@ -255,6 +312,17 @@ impl ConvInput {
         }
     }
 
+    /// Channel `channel` of sample `sample`, counted across the parts.
+    fn plane(&self, sample: usize, mut channel: usize) -> &[f32] {
+        for (values, c) in &self.parts {
+            if channel < *c {
+                return &values.as_slice()[(sample * c + channel) * self.area..][..self.area];
+            }
+            channel -= c;
+        }
+        panic!("GemmConv2d: channel beyond the input's");
+    }
+
     /// Values a tile of `samples` needs staged: none when it can read the single part as it
     /// is.
     fn staged_len(&self, samples: usize, activation: Activation) -> usize {
@@ -267,6 +335,7 @@ impl ConvInput {
 
     /// Samples `first..first + samples` as one [samples, C, H, W] block with `activation`
     /// applied: a slice of the input itself where possible, else staged in `staging`.
+    #[inline(always)]
     fn tile<'a>(
         &'a self,
         first: usize,
@@ -352,10 +421,15 @@ impl GemmConvTranspose2d {
             let cols_n = samples * h * w;
             with_scratch(cin * cols_n + rows * cols_n, |scratch| {
                 let (gathered, product) = scratch.split_at_mut(cin * cols_n);
-                channels_first(
-                    &input[first * in_len..(first + samples) * in_len],
-                    [samples, cin, h * w],
-                    gathered,
+                vectorised(
+                    #[inline(always)]
+                    || {
+                        channels_first(
+                            &input[first * in_len..(first + samples) * in_len],
+                            [samples, cin, h * w],
+                            gathered,
+                        )
+                    },
                 );
                 // SAFETY: every slice is as long as the dimensions and strides describe.
                 unsafe {
@@ -367,7 +441,10 @@ impl GemmConvTranspose2d {
                         parallelism,
                     )
                 };
-                self.col2im(product, [samples, h, w], [oh, ow], out);
+                vectorised(
+                    #[inline(always)]
+                    || self.col2im(product, [samples, h, w], [oh, ow], out),
+                );
             });
         };
         run_tiles(&mut out, per_tile * out_len, run_tile);
@@ -376,6 +453,7 @@ impl GemmConvTranspose2d {
 
     /// Adds every column of `product` [C_out·k·k, B·H·W] into the output positions its kernel
     /// tap reaches, on top of the bias.
+    #[inline(always)]
     fn col2im(
         &self,
         product: &[f32],
@@ -441,6 +519,34 @@ where
     }
 }
 
+/// Runs `f` compiled for AVX-512, else AVX2, where the CPU has them. The crate is built for
+/// baseline x86-64, where the unfolding, transform and write-back loops vectorise only four
+/// lanes wide; gemm picks its kernels at run time the same way. Only element-wise work runs
+/// here (nothing is reassociated), so every width gives the same values.
+#[inline(always)]
+fn vectorised<R>(f: impl FnOnce() -> R) -> R {
+    #[cfg(target_arch = "x86_64")]
+    {
+        #[target_feature(enable = "avx512f")]
+        fn avx512<R>(f: impl FnOnce() -> R) -> R {
+            f()
+        }
+        #[target_feature(enable = "avx2")]
+        fn avx2<R>(f: impl FnOnce() -> R) -> R {
+            f()
+        }
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has AVX-512F.
+            return unsafe { avx512(f) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2.
+            return unsafe { avx2(f) };
+        }
+    }
+    f()
+}
+
 thread_local! {
     /// Per-thread scratch for unfolded inputs and GEMM products, reused across layers so
     /// that large buffers are not allocated and faulted in for every tile.
@@ -459,6 +565,7 @@ fn with_scratch(len: usize, f: impl FnOnce(&mut [f32])) {
 
 /// Unfolds `input` [B, C, H, W] into `cols` [C·k·k, B·OH·OW] (row (c, ky, kx), column
 /// (b, oy, ox)), zero where the kernel reaches into the padding.
+#[inline(always)]
 fn im2col(
     input: &[f32],
     [b, c, h, w]: [usize; 4],
@@ -511,6 +618,7 @@ fn im2col(
 /// `cols` is the input plane shifted by (ky − p)·W + (kx − p) in flattened order, so it is
 /// one long copy per plane, after which the columns that wrapped around a row edge are
 /// zeroed. Rows of a few values each would spend more on per-copy overhead than on data.
+#[inline(always)]
 fn im2col_same(input: &[f32], [b, c, h, w]: [usize; 4], g: ConvGeometry, cols: &mut [f32]) {
     let area = h * w;
     for (row, dst_row) in cols.chunks_mut(b * area).enumerate() {
@@ -543,6 +651,7 @@ fn im2col_same(input: &[f32], [b, c, h, w]: [usize; 4], g: ConvGeometry, cols: &
 }
 
 /// Copies `input` [B, C, L] into `out` [C, B·L].
+#[inline(always)]
 fn channels_first(input: &[f32], [b, c, l]: [usize; 3], out: &mut [f32]) {
     for (ch, dst) in out.chunks_mut(b * l).enumerate() {
         for sample in 0..b {
@@ -553,6 +662,7 @@ fn channels_first(input: &[f32], [b, c, l]: [usize; 3], out: &mut [f32]) {
 
 /// Writes `product` [C, B·L] + bias, activated, plus `residual` [B, C, L] where given, into
 /// `out` [B, C, L].
+#[inline(always)]
 fn write_back(
     product: &[f32],
     bias: &[f32],
@@ -578,6 +688,57 @@ fn write_back(
             }
         }
     }
+}
+
+/// The addressing scores Q·Mᵀ of a memory read on burn's CPU backend: `query` [N, D] against
+/// the memory `slots` [S, D], as [N, S].
+///
+/// burn requests the row-major [N, S] product, which gemm computes transposed as M·Qᵀ with M
+/// as the packed left operand: the whole memory matrix (128 MB at the paper's 16×16 level) is
+/// copied on every read, which for a few queries costs several times the product itself. The
+/// column-major [S, N] product keeps M as gemm's right operand, read in place along its
+/// rows; gemm packs it only for large N, where the copy is amortised over many queries.
+pub fn memory_scores(query: Tensor<2>, slots: Tensor<2>) -> Tensor<2> {
+    let device = query.device();
+    let [n, d] = query.dims();
+    let [s, slot_dim] = slots.dims();
+    assert_eq!(d, slot_dim, "memory_scores: query and slot widths differ");
+    let query = CpuValues::new(query);
+    let slots = CpuValues::new(slots);
+    let (q, m) = (query.as_slice(), slots.as_slice());
+    let mut by_slot = vec![0.0f32; s * n];
+    // SAFETY: `by_slot` holds N·S values at column stride N; `q` is N rows of D values and
+    // `m` S rows of D values, as the strides describe.
+    unsafe {
+        gemm::gemm(
+            n,
+            s,
+            d,
+            by_slot.as_mut_ptr(),
+            n as isize,
+            1,
+            false,
+            q.as_ptr(),
+            1,
+            d as isize,
+            m.as_ptr(),
+            d as isize,
+            1,
+            0.0,
+            1.0,
+            false,
+            false,
+            false,
+            gemm::Parallelism::Rayon(0),
+        );
+    }
+    let mut scores = vec![0.0f32; n * s];
+    for (j, column) in by_slot.chunks_exact(n).enumerate() {
+        for (b, &v) in column.iter().enumerate() {
+            scores[b * s + j] = v;
+        }
+    }
+    tensor(scores, [n, s], &device)
 }
 
 /// `dst` [M, N] = `lhs` [M, K] · `rhs` [K, N], all row-major and contiguous.
@@ -722,6 +883,21 @@ mod tests {
             );
         }
         assert!(exp_non_positive(-200.0) < 1e-37);
+    }
+
+    #[test]
+    fn memory_scores_match_burns_product_for_few_and_many_queries() {
+        let mut rng = NoiseRng::new(14);
+        // 200 queries is past gemm's threshold for packing the memory; 1 takes its GEMV.
+        for (queries, slots, width) in [(1, 37, 64), (4, 50, 100), (200, 23, 48)] {
+            let query = random(&mut rng, [queries, width]);
+            let memory = random(&mut rng, [slots, width]);
+            let expected = query.clone().matmul(memory.clone().transpose());
+            let ours = memory_scores(query, memory);
+            assert_eq!(ours.dims(), [queries, slots]);
+            let diff = (ours - expected).abs().max().into_scalar::<f32>();
+            assert!(diff < 1e-4, "{queries} queries × {slots} slots: {diff}");
+        }
     }
 
     #[test]

@@ -7,7 +7,7 @@ use burn::tensor::activation::{relu, softmax};
 use burn::tensor::{Device, Tensor};
 
 use super::config::{FLOW_CHANNELS, ModelConfig, SkipOp};
-use super::gemm_conv::{Activation, ConvGeometry, GemmConv2d, GemmConvTranspose2d};
+use super::gemm_conv::{Activation, ConvGeometry, GemmConv2d, GemmConvTranspose2d, memory_scores};
 use super::layers::{BatchNorm2d, kaiming_conv, param, upsampling_conv};
 use super::rng::NoiseRng;
 
@@ -211,7 +211,12 @@ impl Memory {
     /// Reads the memory with `query` [N, C].
     pub fn forward(&self, query: Tensor<2>) -> MemoryRead {
         let m = self.slots.val();
-        let sm = softmax(query.matmul(m.clone().transpose()), 1);
+        let scores = if query.device().is_autodiff() {
+            query.matmul(m.clone().transpose())
+        } else {
+            memory_scores(query, m.clone())
+        };
+        let sm = softmax(scores, 1);
         let attention = if self.shrink_thres > 0.0 {
             // ReLU-based hard shrinkage ŵ = ReLU(w − λ)·w / (|w − λ| + 1e-12), then
             // ŵ / max(‖ŵ‖₁, 1e-12) (ŵ ≥ 0, so the L1 norm is the plain sum).
