@@ -105,6 +105,14 @@ impl Hit {
     }
 }
 
+/// Ray parameters at which a camera ray meets the road plane and the raised-sidewalk plane
+/// (infinite for rays that do not descend).
+#[derive(Debug, Clone, Copy)]
+pub struct PlaneHits {
+    floor: f32,
+    raised: f32,
+}
+
 /// A light source for night scenes, camera-relative.
 #[derive(Debug, Clone, Copy)]
 pub struct Light {
@@ -570,13 +578,13 @@ impl<'w> FrameView<'w> {
     }
 
     /// Intersection with the ground: road plane, raised sidewalks and kerb faces.
-    fn ground(&self, dir: V3, s_hint: Option<f32>) -> Option<Hit> {
+    fn ground(&self, dir: V3, planes: PlaneHits, s_hint: Option<f32>) -> Option<Hit> {
         if dir.z >= -1e-6 {
             return None;
         }
         let road = &self.world.road;
         let h = self.cam.height;
-        let t0 = h / -dir.z;
+        let t0 = planes.floor;
         let make = |t: f32, s: f32, d: f32, z: f32, part: u8, normal: V3| Hit {
             t,
             key: KEY_GROUND,
@@ -591,7 +599,7 @@ impl<'w> FrameView<'w> {
             return Some(make(t0, s, d, 0.0, 0, up));
         }
         let kh = road.kerb_height;
-        let t1 = (h - kh) / -dir.z;
+        let t1 = planes.raised;
         let (s1, d1) = self.frenet_at(dir, t1, s_hint);
         if road.is_raised(s1, d1) {
             return Some(make(t1, s1, d1, kh, 0, up));
@@ -629,14 +637,41 @@ impl<'w> FrameView<'w> {
     /// [`FrameView::trace`] for a point known to lie in `tile`; `s_hint` is the arc length of
     /// a nearby ground point (speeds up the Frenet inversion, same result).
     pub fn trace_in_tile(&self, dir: V3, u: f32, v: f32, tile: usize, s_hint: Option<f32>) -> Hit {
+        self.trace_planes(dir, self.plane_hits(dir.z), u, v, tile, s_hint)
+    }
+
+    /// Where a camera ray with vertical component `dir_z` meets the road plane and the
+    /// raised-sidewalk plane (the same for every ray of an image row).
+    #[inline]
+    pub fn plane_hits(&self, dir_z: f32) -> PlaneHits {
+        let h = self.cam.height;
+        if dir_z < -1e-6 {
+            PlaneHits {
+                floor: h / -dir_z,
+                raised: (h - self.world.road.kerb_height) / -dir_z,
+            }
+        } else {
+            PlaneHits {
+                floor: f32::INFINITY,
+                raised: f32::INFINITY,
+            }
+        }
+    }
+
+    /// [`FrameView::trace_in_tile`] with the ray's [`FrameView::plane_hits`] given.
+    #[inline]
+    pub fn trace_planes(
+        &self,
+        dir: V3,
+        planes: PlaneHits,
+        u: f32,
+        v: f32,
+        tile: usize,
+        s_hint: Option<f32>,
+    ) -> Hit {
         // The ground lies between the raised-sidewalk plane and the road plane along the
         // ray; objects nearer than the former hide it, so it is only resolved when needed.
-        let h = self.cam.height;
-        let (t_floor, t_raised) = if dir.z < -1e-6 {
-            (h / -dir.z, (h - self.world.road.kerb_height) / -dir.z)
-        } else {
-            (f32::INFINITY, f32::INFINITY)
-        };
+        let (t_floor, t_raised) = (planes.floor, planes.raised);
         let mut hit = Hit::sky(dir);
         hit.t = t_floor;
         for &pi in self.tile_prims(tile) {
@@ -677,7 +712,7 @@ impl<'w> FrameView<'w> {
             }
         }
         if (hit.key == KEY_SKY || hit.t >= t_raised)
-            && let Some(g) = self.ground(dir, s_hint)
+            && let Some(g) = self.ground(dir, planes, s_hint)
             && (hit.key == KEY_SKY || g.t < hit.t)
         {
             return g;
