@@ -72,10 +72,24 @@ impl Camera {
     /// component along the optical axis is 1: the ray parameter is the depth.
     #[inline]
     pub fn ray(&self, u: f32, v: f32) -> V3 {
+        let (x, y) = self.ray_xy(u);
+        V3::new(x, y, self.ray_z(v))
+    }
+
+    /// The horizontal components of [`Camera::ray`], which depend on `u` alone (an image
+    /// column shares them).
+    #[inline]
+    pub fn ray_xy(&self, u: f32) -> (f32, f32) {
         let a = (u - self.cx) / self.fx;
-        let b = (v - self.cy) / self.fy;
         // forward (c, s, 0), right (s, -c, 0), up (0, 0, 1)
-        V3::new(self.c + a * self.s, self.s - a * self.c, -b)
+        (self.c + a * self.s, self.s - a * self.c)
+    }
+
+    /// The vertical component of [`Camera::ray`], which depends on `v` alone (an image row
+    /// shares it).
+    #[inline]
+    pub fn ray_z(&self, v: f32) -> f32 {
+        -((v - self.cy) / self.fy)
     }
 
     /// Converts a world point to camera-relative coordinates.

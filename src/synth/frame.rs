@@ -92,6 +92,9 @@ pub fn cast(view: &FrameView, with_shading: bool) -> (GBuffer, Option<Shading>) 
         .collect();
     let cam = &view.cam;
     let tiles_x = w.div_ceil(TILE);
+    // A pixel's ray shares its horizontal components with its column and the rest with its
+    // row: computed once each instead of per pixel.
+    let columns: Vec<(f32, f32)> = (0..w).map(|x| cam.ray_xy(x as f32 + 0.5)).collect();
     bands.into_par_iter().enumerate().for_each(|(band, out)| {
         let band_rows = out.key.len() / w;
         // Tile by tile, so that each tile's primitive list is fetched once and the previous
@@ -101,12 +104,15 @@ pub fn cast(view: &FrameView, with_shading: bool) -> (GBuffer, Option<Shading>) 
             let x_end = ((tx + 1) * TILE).min(w);
             for r in 0..band_rows {
                 let y = band * TILE + r;
+                let v = y as f32 + 0.5;
+                let dir_z = cam.ray_z(v);
+                let planes = view.plane_hits(dir_z);
                 let mut s_hint = None;
-                for x in tx * TILE..x_end {
+                for (x, &(dir_x, dir_y)) in columns.iter().enumerate().take(x_end).skip(tx * TILE) {
                     let i = r * w + x;
-                    let (u, v) = (x as f32 + 0.5, y as f32 + 0.5);
-                    let dir = cam.ray(u, v);
-                    let hit = view.trace_in_tile(dir, u, v, tile, s_hint);
+                    let u = x as f32 + 0.5;
+                    let dir = V3::new(dir_x, dir_y, dir_z);
+                    let hit = view.trace_planes(dir, planes, u, v, tile, s_hint);
                     s_hint = (hit.key == KEY_GROUND).then_some(hit.local.x);
                     out.key[i] = hit.key;
                     out.part[i] = hit.part;

@@ -9,7 +9,7 @@ use super::math::V3;
 use super::scenario::World;
 use super::scenery::{Shape, StaticKind, StaticObject};
 use super::texture::value2;
-use super::vehicle::VehicleModel;
+use super::vehicle::{Convex, MAX_PLANES, Plane, VehicleModel, Wheel};
 use crate::sequence::Domain;
 
 /// Tile size in pixels.
@@ -105,6 +105,14 @@ impl Hit {
     }
 }
 
+/// Ray parameters at which a camera ray meets the road plane and the raised-sidewalk plane
+/// (infinite for rays that do not descend).
+#[derive(Debug, Clone, Copy)]
+pub struct PlaneHits {
+    floor: f32,
+    raised: f32,
+}
+
 /// A light source for night scenes, camera-relative.
 #[derive(Debug, Clone, Copy)]
 pub struct Light {
@@ -149,6 +157,9 @@ pub struct FrameView<'w> {
     road_kappa: f32,
     /// Primitives of this frame.
     pub prims: Vec<Prim>,
+    /// Per vehicle (by index into `Traffic::vehicles`), the terms of its ray tests for rays
+    /// from the camera; empty for vehicles without a primitive.
+    vehicle_eyes: Vec<VehicleEye>,
     tiles_x: usize,
     tiles_y: usize,
     tile_start: Vec<u32>,
@@ -367,6 +378,7 @@ impl<'w> FrameView<'w> {
                 }
             }
         }
+        let mut vehicle_eyes = vec![VehicleEye::default(); world.traffic.vehicles.len()];
         for (i, v) in world.traffic.vehicles.iter().enumerate() {
             if i == super::traffic::EGO {
                 continue;
@@ -428,6 +440,8 @@ impl<'w> FrameView<'w> {
             if let Some((r, near)) = bounds
                 && (near == CLIP_DEPTH || on_screen(&r, w, h))
             {
+                let eye = (cam.origin() - origin).unrotate_z(c, s);
+                vehicle_eyes[i] = VehicleEye::new(&v.model, eye);
                 prims.push(Prim {
                     what: PrimRef::Vehicle(i as u32),
                     origin,
@@ -435,7 +449,7 @@ impl<'w> FrameView<'w> {
                     s,
                     near,
                     rect: body_rect,
-                    eye: (cam.origin() - origin).unrotate_z(c, s),
+                    eye,
                     x_range: (lo.x, hi.x),
                 });
                 rects.push(r);
@@ -472,6 +486,7 @@ impl<'w> FrameView<'w> {
             road_tangent: (road_here.tx, road_here.ty),
             road_kappa: road_here.kappa,
             prims,
+            vehicle_eyes,
             tiles_x,
             tiles_y,
             tile_start,
@@ -563,13 +578,13 @@ impl<'w> FrameView<'w> {
     }
 
     /// Intersection with the ground: road plane, raised sidewalks and kerb faces.
-    fn ground(&self, dir: V3, s_hint: Option<f32>) -> Option<Hit> {
+    fn ground(&self, dir: V3, planes: PlaneHits, s_hint: Option<f32>) -> Option<Hit> {
         if dir.z >= -1e-6 {
             return None;
         }
         let road = &self.world.road;
         let h = self.cam.height;
-        let t0 = h / -dir.z;
+        let t0 = planes.floor;
         let make = |t: f32, s: f32, d: f32, z: f32, part: u8, normal: V3| Hit {
             t,
             key: KEY_GROUND,
@@ -584,7 +599,7 @@ impl<'w> FrameView<'w> {
             return Some(make(t0, s, d, 0.0, 0, up));
         }
         let kh = road.kerb_height;
-        let t1 = (h - kh) / -dir.z;
+        let t1 = planes.raised;
         let (s1, d1) = self.frenet_at(dir, t1, s_hint);
         if road.is_raised(s1, d1) {
             return Some(make(t1, s1, d1, kh, 0, up));
@@ -622,14 +637,41 @@ impl<'w> FrameView<'w> {
     /// [`FrameView::trace`] for a point known to lie in `tile`; `s_hint` is the arc length of
     /// a nearby ground point (speeds up the Frenet inversion, same result).
     pub fn trace_in_tile(&self, dir: V3, u: f32, v: f32, tile: usize, s_hint: Option<f32>) -> Hit {
+        self.trace_planes(dir, self.plane_hits(dir.z), u, v, tile, s_hint)
+    }
+
+    /// Where a camera ray with vertical component `dir_z` meets the road plane and the
+    /// raised-sidewalk plane (the same for every ray of an image row).
+    #[inline]
+    pub fn plane_hits(&self, dir_z: f32) -> PlaneHits {
+        let h = self.cam.height;
+        if dir_z < -1e-6 {
+            PlaneHits {
+                floor: h / -dir_z,
+                raised: (h - self.world.road.kerb_height) / -dir_z,
+            }
+        } else {
+            PlaneHits {
+                floor: f32::INFINITY,
+                raised: f32::INFINITY,
+            }
+        }
+    }
+
+    /// [`FrameView::trace_in_tile`] with the ray's [`FrameView::plane_hits`] given.
+    #[inline]
+    pub fn trace_planes(
+        &self,
+        dir: V3,
+        planes: PlaneHits,
+        u: f32,
+        v: f32,
+        tile: usize,
+        s_hint: Option<f32>,
+    ) -> Hit {
         // The ground lies between the raised-sidewalk plane and the road plane along the
         // ray; objects nearer than the former hide it, so it is only resolved when needed.
-        let h = self.cam.height;
-        let (t_floor, t_raised) = if dir.z < -1e-6 {
-            (h / -dir.z, (h - self.world.road.kerb_height) / -dir.z)
-        } else {
-            (f32::INFINITY, f32::INFINITY)
-        };
+        let (t_floor, t_raised) = (planes.floor, planes.raised);
         let mut hit = Hit::sky(dir);
         hit.t = t_floor;
         for &pi in self.tile_prims(tile) {
@@ -651,9 +693,9 @@ impl<'w> FrameView<'w> {
                     dl,
                     hit.t,
                 ),
-                PrimRef::Vehicle(i) => intersect_vehicle(
+                PrimRef::Vehicle(i) => intersect_vehicle_from(
                     &self.world.traffic.vehicles[i as usize].model,
-                    ol,
+                    &self.vehicle_eyes[i as usize],
                     dl,
                     hit.t,
                 ),
@@ -670,7 +712,7 @@ impl<'w> FrameView<'w> {
             }
         }
         if (hit.key == KEY_SKY || hit.t >= t_raised)
-            && let Some(g) = self.ground(dir, s_hint)
+            && let Some(g) = self.ground(dir, planes, s_hint)
             && (hit.key == KEY_SKY || g.t < hit.t)
         {
             return g;
@@ -869,39 +911,208 @@ pub fn panel_solid(obj: &StaticObject, x: f32, z: f32) -> bool {
 
 /// Ray-vehicle intersection in vehicle-local coordinates: (t, part, local normal).
 pub fn intersect_vehicle(m: &VehicleModel, o: V3, d: V3, t_max: f32) -> Option<(f32, u8, V3)> {
+    vehicle_hit(m, &o, d, t_max)
+}
+
+/// [`intersect_vehicle`] for a ray from the origin of `eye`, with the same result.
+pub fn intersect_vehicle_from(
+    m: &VehicleModel,
+    eye: &VehicleEye,
+    d: V3,
+    t_max: f32,
+) -> Option<(f32, u8, V3)> {
+    vehicle_hit(m, eye, d, t_max)
+}
+
+/// The terms of a vehicle's ray tests that depend on the ray origin alone. Every camera ray
+/// of a frame starts at the camera, so [`VehicleEye`] computes them once per frame and
+/// vehicle; any other origin ([`V3`]) computes them as the tests need them. Both evaluate the
+/// same expressions, so the hits agree bit for bit.
+trait RayOrigin {
+    /// Corners of the box `[lo, hi]` relative to the origin.
+    fn box_from(&self, lo: V3, hi: V3) -> (V3, V3);
+    /// [`RayOrigin::box_from`] of the bounds of part `k`.
+    fn part_box(&self, k: usize, part: &Convex) -> (V3, V3);
+    /// `p.d - p.n · o` of plane `i` of part `k`.
+    fn plane_dist(&self, k: usize, i: usize, p: &Plane) -> f32;
+    /// [`RayOrigin::box_from`] of the box around wheel `k`.
+    fn wheel_box(&self, k: usize, w: &Wheel) -> (V3, V3);
+    /// The origin seen from wheel `k`.
+    fn wheel(&self, k: usize, w: &Wheel) -> WheelEye;
+}
+
+/// The box around a wheel.
+#[inline]
+fn wheel_bounds(w: &Wheel) -> (V3, V3) {
+    (
+        V3::new(w.x - w.r, w.y0, 0.0),
+        V3::new(w.x + w.r, w.y1, 2.0 * w.r),
+    )
+}
+
+impl RayOrigin for V3 {
+    #[inline]
+    fn box_from(&self, lo: V3, hi: V3) -> (V3, V3) {
+        (lo - *self, hi - *self)
+    }
+
+    #[inline]
+    fn part_box(&self, _: usize, part: &Convex) -> (V3, V3) {
+        self.box_from(part.lo, part.hi)
+    }
+
+    #[inline]
+    fn plane_dist(&self, _: usize, _: usize, p: &Plane) -> f32 {
+        p.d - p.n.dot(*self)
+    }
+
+    #[inline]
+    fn wheel_box(&self, _: usize, w: &Wheel) -> (V3, V3) {
+        let (lo, hi) = wheel_bounds(w);
+        self.box_from(lo, hi)
+    }
+
+    #[inline]
+    fn wheel(&self, _: usize, w: &Wheel) -> WheelEye {
+        let ox = self.x - w.x;
+        let oz = self.z - w.r;
+        let outer = if w.y0 > 0.0 { w.y1 } else { w.y0 };
+        WheelEye {
+            ox,
+            oy: self.y,
+            oz,
+            c: ox * ox + oz * oz - w.r * w.r,
+            outer,
+            outer_dist: outer - self.y,
+        }
+    }
+}
+
+/// The origin-dependent terms of a vehicle's ray tests for one origin (see [`RayOrigin`]).
+#[derive(Debug, Clone, Default)]
+pub struct VehicleEye {
+    /// The origin, vehicle-local.
+    o: V3,
+    /// Per part: its bounds relative to the origin and the origin's distance inside each
+    /// of its planes.
+    parts: Vec<PartEye>,
+    /// Per wheel: its box relative to the origin and the origin seen from the wheel.
+    wheels: Vec<((V3, V3), WheelEye)>,
+}
+
+/// [`VehicleEye`] of one convex part.
+#[derive(Debug, Clone, Copy)]
+struct PartEye {
+    bounds: (V3, V3),
+    dist: [f32; MAX_PLANES],
+}
+
+/// A ray origin relative to a wheel: the terms of [`intersect_wheel`] that do not depend on
+/// the direction.
+#[derive(Debug, Clone, Copy, Default)]
+struct WheelEye {
+    /// Origin x relative to the axle.
+    ox: f32,
+    /// Origin y.
+    oy: f32,
+    /// Origin z relative to the axle.
+    oz: f32,
+    /// `ox² + oz² - r²`.
+    c: f32,
+    /// y of the outer side wall.
+    outer: f32,
+    /// `outer - oy`.
+    outer_dist: f32,
+}
+
+impl VehicleEye {
+    /// The terms of every ray test of `m` for rays from the vehicle-local point `o`.
+    pub fn new(m: &VehicleModel, o: V3) -> Self {
+        let parts = m
+            .parts
+            .iter()
+            .enumerate()
+            .map(|(k, part)| {
+                let mut dist = [0.0; MAX_PLANES];
+                for (i, (d, p)) in dist.iter_mut().zip(&part.planes).enumerate() {
+                    *d = o.plane_dist(k, i, p);
+                }
+                PartEye {
+                    bounds: o.part_box(k, part),
+                    dist,
+                }
+            })
+            .collect();
+        let wheels = m
+            .wheels
+            .iter()
+            .enumerate()
+            .map(|(k, w)| (o.wheel_box(k, w), o.wheel(k, w)))
+            .collect();
+        Self { o, parts, wheels }
+    }
+}
+
+impl RayOrigin for VehicleEye {
+    #[inline]
+    fn box_from(&self, lo: V3, hi: V3) -> (V3, V3) {
+        self.o.box_from(lo, hi)
+    }
+
+    #[inline]
+    fn part_box(&self, k: usize, _: &Convex) -> (V3, V3) {
+        self.parts[k].bounds
+    }
+
+    #[inline]
+    fn plane_dist(&self, k: usize, i: usize, _: &Plane) -> f32 {
+        self.parts[k].dist[i]
+    }
+
+    #[inline]
+    fn wheel_box(&self, k: usize, _: &Wheel) -> (V3, V3) {
+        self.wheels[k].0
+    }
+
+    #[inline]
+    fn wheel(&self, k: usize, _: &Wheel) -> WheelEye {
+        self.wheels[k].1
+    }
+}
+
+#[inline]
+fn vehicle_hit(m: &VehicleModel, o: &impl RayOrigin, d: V3, t_max: f32) -> Option<(f32, u8, V3)> {
     let inv = V3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
     // With every component of `inv` finite no product in the box test is NaN, and plain
     // comparisons answer exactly as `f32::min`/`max` do, at a fraction of their cost.
     let finite = inv.x.is_finite() && inv.y.is_finite() && inv.z.is_finite();
-    let overlap = |lo: V3, hi: V3, t_max: f32| {
+    let overlap = |(lo, hi): (V3, V3), t_max: f32| {
         if finite {
-            overlaps_finite(o, inv, lo, hi, t_max)
+            overlaps_finite(inv, lo, hi, t_max)
         } else {
-            overlaps(o, inv, lo, hi, t_max)
+            overlaps(inv, lo, hi, t_max)
         }
     };
     let (lo, hi) = m.bounds();
-    if !overlap(lo, hi, t_max) {
+    if !overlap(o.box_from(lo, hi), t_max) {
         return None;
     }
     let mut best: Option<(f32, u8, V3)> = None;
     let mut limit = t_max;
     for (k, part) in m.parts.iter().enumerate() {
-        if !overlap(part.lo, part.hi, limit) {
+        if !overlap(o.part_box(k, part), limit) {
             continue;
         }
-        if let Some((t, plane)) = part.intersect(o, d, 1e-4, limit) {
+        if let Some((t, plane)) = part.intersect_at(|i, p| o.plane_dist(k, i, p), d, 1e-4, limit) {
             limit = t;
             best = Some((t, k as u8, part.planes[plane as usize].n));
         }
     }
     for (k, w) in m.wheels.iter().enumerate() {
-        let wlo = V3::new(w.x - w.r, w.y0, 0.0);
-        let whi = V3::new(w.x + w.r, w.y1, 2.0 * w.r);
-        if !overlap(wlo, whi, limit) {
+        if !overlap(o.wheel_box(k, w), limit) {
             continue;
         }
-        if let Some((t, n)) = intersect_wheel(w, o, d, limit) {
+        if let Some((t, n)) = intersect_wheel(w, &o.wheel(k, w), d, limit) {
             limit = t;
             best = Some((t, WHEEL_PART + k as u8, n));
         }
@@ -910,12 +1121,12 @@ pub fn intersect_vehicle(m: &VehicleModel, o: V3, d: V3, t_max: f32) -> Option<(
 }
 
 /// Whether the ray `o + t·d` (with `inv` = 1/d componentwise) passes through the box
-/// `[lo, hi]` for some `t` in `(0, t_max)`.
+/// `[o + lo, o + hi]` for some `t` in `(0, t_max)` (`lo`, `hi` relative to the origin).
 #[inline]
-fn overlaps(o: V3, inv: V3, lo: V3, hi: V3, t_max: f32) -> bool {
-    let (ax, bx) = ((lo.x - o.x) * inv.x, (hi.x - o.x) * inv.x);
-    let (ay, by) = ((lo.y - o.y) * inv.y, (hi.y - o.y) * inv.y);
-    let (az, bz) = ((lo.z - o.z) * inv.z, (hi.z - o.z) * inv.z);
+fn overlaps(inv: V3, lo: V3, hi: V3, t_max: f32) -> bool {
+    let (ax, bx) = (lo.x * inv.x, hi.x * inv.x);
+    let (ay, by) = (lo.y * inv.y, hi.y * inv.y);
+    let (az, bz) = (lo.z * inv.z, hi.z * inv.z);
     // min/max that also behave when a component of d is zero (infinite inv): a NaN from
     // 0·inf makes the comparison fail towards "overlap", which only costs a precise test.
     let t0 = ax.min(bx).max(ay.min(by)).max(az.min(bz)).max(0.0);
@@ -927,7 +1138,7 @@ fn overlaps(o: V3, inv: V3, lo: V3, hi: V3, t_max: f32) -> bool {
 /// instruction each) instead of `f32::min`/`max`, whose NaN handling costs several. Where
 /// they differ, on the sign of a zero, the answer is the same.
 #[inline]
-fn overlaps_finite(o: V3, inv: V3, lo: V3, hi: V3, t_max: f32) -> bool {
+fn overlaps_finite(inv: V3, lo: V3, hi: V3, t_max: f32) -> bool {
     #[inline]
     fn min(a: f32, b: f32) -> f32 {
         if a < b { a } else { b }
@@ -936,39 +1147,36 @@ fn overlaps_finite(o: V3, inv: V3, lo: V3, hi: V3, t_max: f32) -> bool {
     fn max(a: f32, b: f32) -> f32 {
         if a > b { a } else { b }
     }
-    let (ax, bx) = ((lo.x - o.x) * inv.x, (hi.x - o.x) * inv.x);
-    let (ay, by) = ((lo.y - o.y) * inv.y, (hi.y - o.y) * inv.y);
-    let (az, bz) = ((lo.z - o.z) * inv.z, (hi.z - o.z) * inv.z);
+    let (ax, bx) = (lo.x * inv.x, hi.x * inv.x);
+    let (ay, by) = (lo.y * inv.y, hi.y * inv.y);
+    let (az, bz) = (lo.z * inv.z, hi.z * inv.z);
     let t0 = max(max(max(min(ax, bx), min(ay, by)), min(az, bz)), 0.0);
     let t1 = min(min(min(max(ax, bx), max(ay, by)), max(az, bz)), t_max);
     t0 <= t1
 }
 
-fn intersect_wheel(w: &super::vehicle::Wheel, o: V3, d: V3, t_max: f32) -> Option<(f32, V3)> {
-    let ox = o.x - w.x;
-    let oz = o.z - w.r;
+fn intersect_wheel(w: &Wheel, o: &WheelEye, d: V3, t_max: f32) -> Option<(f32, V3)> {
     let mut best: Option<(f32, V3)> = None;
     let a = d.x * d.x + d.z * d.z;
     if a > 1e-12 {
-        let b = ox * d.x + oz * d.z;
-        let c = ox * ox + oz * oz - w.r * w.r;
-        let disc = b * b - a * c;
+        let b = o.ox * d.x + o.oz * d.z;
+        let disc = b * b - a * o.c;
         if disc >= 0.0 {
             let t = (-b - disc.sqrt()) / a;
-            let y = o.y + t * d.y;
+            let y = o.oy + t * d.y;
             if t > 1e-4 && t < t_max && y >= w.y0 && y <= w.y1 {
-                let px = ox + t * d.x;
-                let pz = oz + t * d.z;
+                let px = o.ox + t * d.x;
+                let pz = o.oz + t * d.z;
                 best = Some((t, V3::new(px / w.r, 0.0, pz / w.r)));
             }
         }
     }
     // The outer side wall.
-    let outer = if w.y0 > 0.0 { w.y1 } else { w.y0 };
+    let outer = o.outer;
     if d.y.abs() > 1e-9 {
-        let t = (outer - o.y) / d.y;
-        let px = ox + t * d.x;
-        let pz = oz + t * d.z;
+        let t = o.outer_dist / d.y;
+        let px = o.ox + t * d.x;
+        let pz = o.oz + t * d.z;
         let facing = (outer > 0.0 && d.y < 0.0) || (outer < 0.0 && d.y > 0.0);
         if facing && t > 1e-4 && t < best.map_or(t_max, |b| b.0) && px * px + pz * pz <= w.r * w.r {
             best = Some((t, V3::new(0.0, outer.signum(), 0.0)));
@@ -997,8 +1205,9 @@ mod tests {
             let d = (lo + hi) * 0.5 - o + v(-2.0, 2.0);
             let t_max = v(0.2, 1.5).x;
             let inv = V3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
-            let slow = overlaps(o, inv, lo, hi, t_max);
-            assert_eq!(overlaps_finite(o, inv, lo, hi, t_max), slow, "{o:?} {d:?}");
+            let (lo, hi) = (lo - o, hi - o);
+            let slow = overlaps(inv, lo, hi, t_max);
+            assert_eq!(overlaps_finite(inv, lo, hi, t_max), slow, "{o:?} {d:?}");
             hits += usize::from(slow);
         }
         // Both answers occur often.

@@ -88,12 +88,26 @@ impl Convex {
     /// `o + t·dir` with `t` in `(t_min, t_max)`.
     #[inline]
     pub fn intersect(&self, o: V3, dir: V3, t_min: f32, t_max: f32) -> Option<(f32, u8)> {
+        self.intersect_at(|_, p| p.d - p.n.dot(o), dir, t_min, t_max)
+    }
+
+    /// [`Convex::intersect`] with the ray origin given by `dist(i, plane)`, the signed
+    /// distance `plane.d - plane.n · o` of the origin inside plane `i` (which a caller that
+    /// casts many rays from one origin computes once).
+    #[inline]
+    pub fn intersect_at(
+        &self,
+        dist: impl Fn(usize, &Plane) -> f32,
+        dir: V3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(f32, u8)> {
         let mut t0 = t_min;
         let mut t1 = t_max;
         let mut entry = u8::MAX;
         for (i, p) in self.planes[..self.count as usize].iter().enumerate() {
             let denom = p.n.dot(dir);
-            let dist = p.d - p.n.dot(o);
+            let dist = dist(i, p);
             if denom.abs() < 1e-12 {
                 if dist < 0.0 {
                     return None;
