@@ -73,7 +73,7 @@ impl WinogradKernel {
 
     /// Whether an H×W map tiles exactly into 2×2 output blocks.
     pub(super) fn fits(h: usize, w: usize) -> bool {
-        h % 2 == 0 && w % 2 == 0
+        h.is_multiple_of(2) && w.is_multiple_of(2)
     }
 
     /// Values one sample needs in the scratch: its transformed inputs and products.
