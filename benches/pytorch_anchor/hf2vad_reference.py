@@ -200,27 +200,21 @@ class MLMemAESC(nn.Module):
         inter = {"x3": x3}
         zeros = lambda: torch.zeros(b, self.num_slots, dtype=x.dtype, device=x.device)  # noqa: E731
 
-        if self.mem_usage[3]:
+        def through(level, h):
+            # A disabled memory passes its input on with the reference's all-zero attention.
+            if not self.mem_usage[level]:
+                return h, zeros()
+            memory = getattr(self, f"mem{level}")
             if return_intermediates:
-                inter["att_softmax3"] = self.mem3.attention_softmax(x3)
-            h, att3 = self.mem3(x3)
-        else:
-            h, att3 = x3, zeros()
+                inter[f"att_softmax{level}"] = memory.attention_softmax(h)
+            return memory(h)
+
+        h, att3 = through(3, x3)
         h = self.up_3(h, x2)
         inter["up3_out"] = h
-        if self.mem_usage[2]:
-            if return_intermediates:
-                inter["att_softmax2"] = self.mem2.attention_softmax(h)
-            h, att2 = self.mem2(h)
-        else:
-            att2 = zeros()
+        h, att2 = through(2, h)
         h = self.up_2(h, x1)
-        if self.mem_usage[1]:
-            if return_intermediates:
-                inter["att_softmax1"] = self.mem1.attention_softmax(h)
-            h, att1 = self.mem1(h)
-        else:
-            att1 = zeros()
+        h, att1 = through(1, h)
         h = self.up_1(h, x0)
         recon = self.out_conv(h)
         out = {"recon": recon, "att_weight1": att1, "att_weight2": att2, "att_weight3": att3}

@@ -96,6 +96,13 @@ pub struct ConvGeometry {
 }
 
 impl ConvGeometry {
+    /// The 3×3 stride-1 convolution that keeps the map's size.
+    pub(super) const SAME_3X3: Self = Self {
+        kernel: 3,
+        stride: 1,
+        padding: 1,
+    };
+
     /// Panics unless a `layer`'s weight of kernel `kh`×`kw` has this geometry's kernel: the
     /// lowering is set up once per layer from the model's own modules.
     fn expect_kernel(&self, [kh, kw]: [usize; 2], layer: &str) {
@@ -136,13 +143,7 @@ impl GemmConv2d {
         let [cout, cin, kh, kw] = weight.dims();
         geometry.expect_kernel([kh, kw], "GemmConv2d");
         let weight = values(weight);
-        let same_3x3 = geometry
-            == ConvGeometry {
-                kernel: 3,
-                stride: 1,
-                padding: 1,
-            };
-        let winograd = (same_3x3 && cin >= winograd::MIN_CHANNELS)
+        let winograd = (geometry == ConvGeometry::SAME_3X3 && cin >= winograd::MIN_CHANNELS)
             .then(|| WinogradKernel::new(&weight, cout, cin));
         Self {
             weight,
@@ -680,12 +681,19 @@ fn write_back(
             for (d, s) in dst.iter_mut().zip(src) {
                 *d = s + bias;
             }
-            activation.apply(dst);
-            if let Some(residual) = residual {
-                for (d, r) in dst.iter_mut().zip(&residual[at..][..l]) {
-                    *d += r;
-                }
-            }
+            activate_and_add(dst, activation, residual.map(|r| &r[at..][..l]));
+        }
+    }
+}
+
+/// Applies `activation` to `dst`, then adds `residual` (laid out as `dst`) where given: the
+/// end of every lowered convolution's write-back.
+#[inline(always)]
+fn activate_and_add(dst: &mut [f32], activation: Activation, residual: Option<&[f32]>) {
+    activation.apply(dst);
+    if let Some(residual) = residual {
+        for (d, r) in dst.iter_mut().zip(residual) {
+            *d += r;
         }
     }
 }
@@ -802,12 +810,12 @@ mod tests {
     use super::*;
     use crate::model::rng::NoiseRng;
 
-    fn random<const D: usize>(rng: &mut NoiseRng, shape: [usize; D]) -> Tensor<D> {
+    pub(super) fn random<const D: usize>(rng: &mut NoiseRng, shape: [usize; D]) -> Tensor<D> {
         let n = shape.iter().product();
         tensor(rng.normal_vec(n, 0.0, 1.0), shape, &Device::flex())
     }
 
-    fn max_abs_diff(a: Tensor<4>, b: Tensor<4>) -> f32 {
+    pub(super) fn max_abs_diff(a: Tensor<4>, b: Tensor<4>) -> f32 {
         assert_eq!(a.dims(), b.dims());
         (a - b).abs().max().into_scalar::<f32>()
     }
@@ -855,11 +863,7 @@ mod tests {
             let a = random(&mut rng, [batch, 2, side, side]);
             let weight = random(&mut rng, [3, 5, 3, 3]);
             let bias = random(&mut rng, [3]);
-            let geometry = ConvGeometry {
-                kernel: 3,
-                stride: 1,
-                padding: 1,
-            };
+            let geometry = ConvGeometry::SAME_3X3;
             let options = ConvOptions::new([1, 1], [1, 1], [1, 1], 1);
             let activated =
                 burn::tensor::activation::elu(Tensor::cat(vec![x.clone(), a.clone()], 1), 1.0);

@@ -12,7 +12,7 @@
 
 use rayon::prelude::*;
 
-use super::{Activation, matmul, vectorised, with_scratch};
+use super::{Activation, activate_and_add, matmul, vectorised, with_scratch};
 
 /// Positions of the 4×4 transformed domain.
 const POSITIONS: usize = 16;
@@ -268,15 +268,8 @@ fn fold_products(m: &[f32], [samples, cout, h, w]: [usize; 4], stage: OutputStag
             interleave(top, &top_out[..tw], &top_out[tw..2 * tw], bias);
             interleave(bottom, &bottom_out[..tw], &bottom_out[tw..2 * tw], bias);
         }
-        stage.activation.apply(plane);
-        if let Some(residual) = stage.residual {
-            for (d, r) in plane
-                .iter_mut()
-                .zip(&residual[plane_index * area..][..area])
-            {
-                *d += r;
-            }
-        }
+        let residual = stage.residual.map(|r| &r[plane_index * area..][..area]);
+        activate_and_add(plane, stage.activation, residual);
     }
 }
 
@@ -302,33 +295,14 @@ fn interleave(dst: &mut [f32], even: &[f32], odd: &[f32], bias: f32) {
 
 #[cfg(test)]
 mod tests {
-    use burn::tensor::Device;
+    use burn::tensor::Tensor;
     use burn::tensor::module::conv2d;
     use burn::tensor::ops::ConvOptions;
-    use burn::tensor::{Tensor, TensorData};
 
+    use super::super::tests::{max_abs_diff, random};
     use super::super::{ConvGeometry, GemmConv2d};
     use super::*;
     use crate::model::rng::NoiseRng;
-
-    const SAME_3X3: ConvGeometry = ConvGeometry {
-        kernel: 3,
-        stride: 1,
-        padding: 1,
-    };
-
-    fn random<const D: usize>(rng: &mut NoiseRng, shape: [usize; D]) -> Tensor<D> {
-        let n = shape.iter().product();
-        Tensor::from_data(
-            TensorData::new(rng.normal_vec(n, 0.0, 1.0), shape),
-            &Device::flex(),
-        )
-    }
-
-    fn max_abs_diff(a: Tensor<4>, b: Tensor<4>) -> f32 {
-        assert_eq!(a.dims(), b.dims());
-        (a - b).abs().max().into_scalar::<f32>()
-    }
 
     #[test]
     fn winograd_layers_match_burns_direct_convolution() {
@@ -342,7 +316,12 @@ mod tests {
             let x = random(&mut rng, [batch, cin, h, w]);
             let weight = random(&mut rng, [cout, cin, 3, 3]);
             let bias = random(&mut rng, [cout]);
-            let layer = GemmConv2d::new(weight.clone(), bias.clone(), SAME_3X3, Activation::Relu);
+            let layer = GemmConv2d::new(
+                weight.clone(),
+                bias.clone(),
+                ConvGeometry::SAME_3X3,
+                Activation::Relu,
+            );
             assert!(
                 layer.winograd.is_some(),
                 "{cin} channels take the Winograd path"
@@ -368,7 +347,7 @@ mod tests {
                 burn::tensor::activation::elu(Tensor::cat(vec![x.clone(), a.clone()], 1), 1.0);
             let expected =
                 x.clone() + conv2d(activated, weight.clone(), Some(bias.clone()), options);
-            let layer = GemmConv2d::new(weight, bias, SAME_3X3, Activation::Identity);
+            let layer = GemmConv2d::new(weight, bias, ConvGeometry::SAME_3X3, Activation::Identity);
             assert!(layer.winograd.is_some());
             let ours = layer.forward_fused(vec![x, a], Activation::Elu, true);
             let diff = max_abs_diff(ours, expected);
@@ -382,14 +361,19 @@ mod tests {
         let thin = GemmConv2d::new(
             random(&mut rng, [4, MIN_CHANNELS - 1, 3, 3]),
             random(&mut rng, [4]),
-            SAME_3X3,
+            ConvGeometry::SAME_3X3,
             Activation::Identity,
         );
         assert!(thin.winograd.is_none());
         let weight = random(&mut rng, [6, 8, 3, 3]);
         let bias = random(&mut rng, [6]);
         let x = random(&mut rng, [3, 8, 5, 6]);
-        let layer = GemmConv2d::new(weight.clone(), bias.clone(), SAME_3X3, Activation::Identity);
+        let layer = GemmConv2d::new(
+            weight.clone(),
+            bias.clone(),
+            ConvGeometry::SAME_3X3,
+            Activation::Identity,
+        );
         assert!(!WinogradKernel::fits(5, 6));
         let options = ConvOptions::new([1, 1], [1, 1], [1, 1], 1);
         let diff = max_abs_diff(
