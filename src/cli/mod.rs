@@ -6,6 +6,7 @@ mod eval;
 mod export;
 mod flow;
 mod generate;
+mod heap;
 mod inspect;
 mod labels;
 mod render;
