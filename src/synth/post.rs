@@ -157,11 +157,21 @@ pub fn finish(
         .par_chunks_mut(3 * w)
         .zip(hdr.par_chunks(w))
         .for_each(|(out, row)| {
-            for (px, c) in out.chunks_exact_mut(3).zip(row) {
-                let c = (*c * exposure).desaturate(desat);
-                for (byte, v) in px.iter_mut().zip([c.r, c.g, c.b]) {
-                    *byte = lut[(aces(v.max(0.0)) * 4095.0) as usize];
-                }
+            let linear: Vec<f32> = row
+                .iter()
+                .flat_map(|c| {
+                    let c = (*c * exposure).desaturate(desat);
+                    [c.r, c.g, c.b]
+                })
+                .collect();
+            // The tone curve runs as a pass of its own over the channels, where the compiler
+            // vectorises its division; the table lookups follow.
+            let steps: Vec<u32> = linear
+                .iter()
+                .map(|v| (aces(v.max(0.0)) * 4095.0) as u32)
+                .collect();
+            for (byte, &step) in out.iter_mut().zip(&steps) {
+                *byte = lut[(step as usize).min(4095)];
             }
         });
     image::RgbImage::from_raw(w as u32, h as u32, bytes)

@@ -117,7 +117,7 @@ impl Centerline {
     }
 
     /// Position, tangent and curvature at arc length `s` (straight extrapolation outside).
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, s: f32) -> CenterSample {
         let last = self.knots.len() - 1;
         let u = (s - self.s_start) / STEP;
