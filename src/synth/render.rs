@@ -128,6 +128,41 @@ pub struct Light {
     pub range: f32,
 }
 
+impl Light {
+    /// Corners (low, high) of a box holding every point this light reaches: its range
+    /// sphere, cut to the spot's cone. Tiles are binned by it, so it must never be too
+    /// small; a headlight's box is a fraction of its range cube.
+    pub fn reach_box(&self) -> (V3, V3) {
+        let r = self.range;
+        if self.dir == V3::default() {
+            let e = V3::new(r, r, r);
+            return (self.pos - e, self.pos + e);
+        }
+        let sin_outer = (1.0 - self.cos_outer * self.cos_outer).max(0.0).sqrt();
+        // Largest component along an axis of a unit vector within the cone: 1 when the
+        // axis lies inside it, else the cosine of the axis's angle to the cone's edge.
+        let reach = |d: f32| {
+            if d >= self.cos_outer {
+                1.0
+            } else {
+                d * self.cos_outer + (1.0 - d * d).max(0.0).sqrt() * sin_outer
+            }
+        };
+        // Rounding slack, so that the box stays conservative.
+        let slack = 1e-3 * r + 1e-2;
+        let side = |d: f32, p: f32| {
+            (
+                p - r * reach(-d).max(0.0) - slack,
+                p + r * reach(d).max(0.0) + slack,
+            )
+        };
+        let (x0, x1) = side(self.dir.x, self.pos.x);
+        let (y0, y1) = side(self.dir.y, self.pos.y);
+        let (z0, z1) = side(self.dir.z, self.pos.z);
+        (V3::new(x0, y0, z0), V3::new(x1, y1, z1))
+    }
+}
+
 /// A bright light source drawn with a glow halo after shading.
 #[derive(Debug, Clone, Copy)]
 pub struct Glow {
@@ -504,9 +539,7 @@ impl<'w> FrameView<'w> {
             .lights
             .iter()
             .map(|l| {
-                let r = V3::new(l.range, l.range, l.range);
-                let lo = l.pos - r;
-                let hi = l.pos + r;
+                let (lo, hi) = l.reach_box();
                 screen_rect(
                     &view.cam,
                     &box_corners(lo, 1.0, 0.0, V3::default(), hi - lo),

@@ -926,3 +926,55 @@ fn vehicle_surface(view: &FrameView, i: usize, hit: &Hit, fu: f32, fw: f32) -> S
     }
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synth::rng::Rng;
+
+    /// Tiles are binned by `Light::reach_box`: a light must add nothing outside it.
+    #[test]
+    fn lights_add_nothing_outside_their_reach_box() {
+        let mut rng = Rng::new(7);
+        let headlight = Light {
+            pos: V3::new(3.0, -1.0, 0.7),
+            colour: Rgb::new(1.0, 1.0, 1.0),
+            dir: V3::new(0.6, 0.8, -0.06).normalized(),
+            cos_outer: 0.86,
+            range: 35.0,
+        };
+        let lamp = Light {
+            pos: V3::new(0.0, 4.0, 8.0),
+            colour: Rgb::new(1.0, 1.0, 1.0),
+            dir: V3::new(0.0, 0.0, -1.0),
+            cos_outer: 0.2,
+            range: 20.0,
+        };
+        for l in [headlight, lamp] {
+            let (lo, hi) = l.reach_box();
+            // The cone cuts the box well below the range cube.
+            let volume = (hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
+            assert!(volume < 0.75 * (2.0 * l.range).powi(3), "{volume}");
+            let (mut lit, mut outside) = (0, 0);
+            for _ in 0..20_000 {
+                let p = l.pos
+                    + V3::new(
+                        rng.range(-1.2, 1.2),
+                        rng.range(-1.2, 1.2),
+                        rng.range(-1.2, 1.2),
+                    ) * l.range;
+                let n = (l.pos - p).normalized();
+                let inside = (lo.x..=hi.x).contains(&p.x)
+                    && (lo.y..=hi.y).contains(&p.y)
+                    && (lo.z..=hi.z).contains(&p.z);
+                if light_from(&l, p, n) != Rgb::BLACK {
+                    lit += 1;
+                    assert!(inside, "{p:?} is lit outside {lo:?}..{hi:?}");
+                } else if !inside {
+                    outside += 1;
+                }
+            }
+            assert!(lit > 100 && outside > 1000, "{lit} lit, {outside} culled");
+        }
+    }
+}
