@@ -5,8 +5,9 @@
 
 use rayon::prelude::*;
 
+use super::light_bank::LightBank;
 use super::math::{Rgb, V3};
-use super::render::{FrameView, KEY_BACKDROP, KEY_GROUND, KEY_SKY, KEY_VEHICLE, TILE};
+use super::render::{FrameView, Hit, KEY_BACKDROP, KEY_GROUND, KEY_SKY, KEY_VEHICLE, TILE};
 use super::scenario::World;
 use super::{flow, labels, post, shade};
 use crate::sequence::{FrameId, FrameRecord};
@@ -95,13 +96,21 @@ pub fn cast(view: &FrameView, with_shading: bool) -> (GBuffer, Option<Shading>) 
     // A pixel's ray shares its horizontal components with its column and the rest with its
     // row: computed once each instead of per pixel.
     let columns: Vec<(f32, f32)> = (0..w).map(|x| cam.ray_xy(x as f32 + 0.5)).collect();
+    let night = view.world.lighting.night;
     bands.into_par_iter().enumerate().for_each(|(band, out)| {
         let band_rows = out.key.len() / w;
+        let mut hits: Vec<(usize, Hit, V3)> = Vec::with_capacity(TILE * TILE);
+        let mut reaching = Vec::new();
+        let mut bank = LightBank::default();
         // Tile by tile, so that each tile's primitive list is fetched once and the previous
-        // pixel's ground point seeds the Frenet inversion of the next.
+        // pixel's ground point seeds the Frenet inversion of the next. A tile is traced
+        // before it is shaded: the box around its surface points tells which of its lights
+        // can reach any of them.
         for tx in 0..tiles_x {
             let tile = band * tiles_x + tx;
             let x_end = ((tx + 1) * TILE).min(w);
+            let mut lo = V3::new(f32::INFINITY, f32::INFINITY, f32::INFINITY);
+            let mut hi = V3::new(f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY);
             for r in 0..band_rows {
                 let y = band * TILE + r;
                 let v = y as f32 + 0.5;
@@ -117,22 +126,34 @@ pub fn cast(view: &FrameView, with_shading: bool) -> (GBuffer, Option<Shading>) 
                     out.key[i] = hit.key;
                     out.part[i] = hit.part;
                     out.depth[i] = hit.t;
+                    // Camera-relative surface point, as shading computes it.
+                    let p = cam.origin() + dir * hit.t;
                     out.point[i] = match hit.key {
                         KEY_SKY | KEY_BACKDROP => dir,
                         k if k & KEY_VEHICLE != 0 => hit.local,
-                        _ => {
-                            let p = cam.origin() + dir * hit.t;
-                            V3::new(cam.x + p.x, cam.y + p.y, p.z)
-                        }
+                        _ => V3::new(cam.x + p.x, cam.y + p.y, p.z),
                     };
                     if with_shading {
-                        let s = shade::shade(view, &hit, dir, tile);
-                        out.rgb[i] = s.rgb;
-                        out.semantic[i] = s.semantic;
-                        out.tag[i] = s.tag;
-                        out.id[i] = s.id;
+                        if !matches!(hit.key, KEY_SKY | KEY_BACKDROP) {
+                            lo = lo.min(p);
+                            hi = hi.max(p);
+                        }
+                        hits.push((i, hit, dir));
                     }
                 }
+            }
+            if !with_shading {
+                continue;
+            }
+            if night {
+                bank.fill(view, view.lights_reaching(tile, lo, hi, &mut reaching));
+            }
+            for (i, hit, dir) in hits.drain(..) {
+                let s = shade::shade(view, &hit, dir, tile, &bank);
+                out.rgb[i] = s.rgb;
+                out.semantic[i] = s.semantic;
+                out.tag[i] = s.tag;
+                out.id[i] = s.id;
             }
         }
     });
@@ -174,7 +195,10 @@ fn antialias_edges(view: &FrameView, key: &[u32], part: &[u8], hdr: &mut [Rgb]) 
     let surface = |i: usize| surfaces[i];
     let lum: Vec<f32> = hdr.par_iter().map(|c| c.luminance()).collect();
     let cam = &view.cam;
+    let night = view.world.lighting.night;
     hdr.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+        let mut bank = LightBank::default();
+        let mut bank_tile = None;
         for (x, out) in row.iter_mut().enumerate() {
             let i = y * w + x;
             let (k, l) = (surface(i), lum[i]);
@@ -193,8 +217,13 @@ fn antialias_edges(view: &FrameView, key: &[u32], part: &[u8], hdr: &mut [Rgb]) 
                 let (u, v) = (x as f32 + 0.5 + dx, y as f32 + 0.5 + dy);
                 let dir = cam.ray(u, v);
                 let tile = view.tile_of(u, v);
+                // Sub-samples may leave the tile's box of surface points: all its lights.
+                if night && bank_tile != Some(tile) {
+                    bank.fill(view, view.tile_lights(tile));
+                    bank_tile = Some(tile);
+                }
                 let hit = view.trace_in_tile(dir, u, v, tile, None);
-                sum += shade::shade(view, &hit, dir, tile).rgb;
+                sum += shade::shade(view, &hit, dir, tile, &bank).rgb;
             }
             *out = sum * (1.0 / (1 + EDGE_SAMPLES.len()) as f32);
         }

@@ -50,6 +50,18 @@ impl V3 {
         if l > 0.0 { self * (1.0 / l) } else { self }
     }
 
+    /// Component-wise minimum.
+    #[inline]
+    pub fn min(self, o: V3) -> V3 {
+        V3::new(self.x.min(o.x), self.y.min(o.y), self.z.min(o.z))
+    }
+
+    /// Component-wise maximum.
+    #[inline]
+    pub fn max(self, o: V3) -> V3 {
+        V3::new(self.x.max(o.x), self.y.max(o.y), self.z.max(o.z))
+    }
+
     /// Rotates the horizontal part by the angle whose cosine and sine are given (about z).
     #[inline]
     pub fn rotate_z(self, c: f32, s: f32) -> V3 {

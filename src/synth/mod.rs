@@ -46,6 +46,7 @@ mod error;
 mod flow;
 mod frame;
 mod labels;
+mod light_bank;
 mod lighting;
 mod math;
 mod post;

@@ -161,6 +161,37 @@ impl Light {
         let (z0, z1) = side(self.dir.z, self.pos.z);
         (V3::new(x0, y0, z0), V3::new(x1, y1, z1))
     }
+
+    /// Whether the light may reach a point of the box `lo..=hi`: `false` only where it adds
+    /// nothing to any point of the box (outside its reach box or beyond its range).
+    pub fn may_reach(&self, lo: V3, hi: V3) -> bool {
+        let (near, far) = self.reach_box();
+        if near.x > hi.x || near.y > hi.y || near.z > hi.z {
+            return false;
+        }
+        if far.x < lo.x || far.y < lo.y || far.z < lo.z {
+            return false;
+        }
+        let gap = |p: f32, a: f32, b: f32| (a - p).max(p - b).max(0.0);
+        let g = V3::new(
+            gap(self.pos.x, lo.x, hi.x),
+            gap(self.pos.y, lo.y, hi.y),
+            gap(self.pos.z, lo.z, hi.z),
+        );
+        // Shading compares a rounded squared distance with the squared range: the margin
+        // keeps this test on the safe side of that rounding.
+        g.dot(g) <= self.range * self.range * 1.001
+    }
+}
+
+/// The night lights to evaluate at a surface point.
+#[derive(Debug, Clone, Copy)]
+pub struct LightsInReach<'a> {
+    /// Indices into [`FrameView::lights`]: a tile's list in its order, perhaps without the
+    /// lights that cannot reach the tile's surface points.
+    pub lights: &'a [u32],
+    /// Whether [`FrameView::ego_headlight`] may reach the point.
+    pub ego_headlight: bool,
 }
 
 /// A bright light source drawn with a glow halo after shading.
@@ -203,6 +234,8 @@ pub struct FrameView<'w> {
     vehicle_items: Vec<u32>,
     /// Night lights of this frame.
     pub lights: Vec<Light>,
+    /// The ego's headlights (lit at night).
+    pub ego_headlight: Light,
     light_start: Vec<u32>,
     light_items: Vec<u32>,
     /// Glow sources.
@@ -529,6 +562,7 @@ impl<'w> FrameView<'w> {
             vehicle_start,
             vehicle_items,
             lights: Vec::new(),
+            ego_headlight: world.ego_headlight(&cam),
             light_start: vec![0; tiles_x * tiles_y + 1],
             light_items: Vec::new(),
             glows: Vec::new(),
@@ -580,10 +614,35 @@ impl<'w> FrameView<'w> {
             [self.vehicle_start[tile] as usize..self.vehicle_start[tile + 1] as usize]
     }
 
-    /// Light indices of a tile.
+    /// Every light that may reach a point of `tile`.
     #[inline]
-    pub fn tile_lights(&self, tile: usize) -> &[u32] {
-        &self.light_items[self.light_start[tile] as usize..self.light_start[tile + 1] as usize]
+    pub fn tile_lights(&self, tile: usize) -> LightsInReach<'_> {
+        LightsInReach {
+            lights: &self.light_items
+                [self.light_start[tile] as usize..self.light_start[tile + 1] as usize],
+            ego_headlight: true,
+        }
+    }
+
+    /// The lights of `tile` that may reach a point of the box `lo..=hi` (around the surface
+    /// points of the tile), their indices written to `buf`.
+    pub fn lights_reaching<'b>(
+        &self,
+        tile: usize,
+        lo: V3,
+        hi: V3,
+        buf: &'b mut Vec<u32>,
+    ) -> LightsInReach<'b> {
+        buf.clear();
+        let all = self.tile_lights(tile).lights;
+        buf.extend(
+            all.iter()
+                .filter(|&&i| self.lights[i as usize].may_reach(lo, hi)),
+        );
+        LightsInReach {
+            lights: buf,
+            ego_headlight: self.ego_headlight.may_reach(lo, hi),
+        }
     }
 
     /// The nearest surface through continuous image point (u, v).

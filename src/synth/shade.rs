@@ -4,6 +4,7 @@
 //! with contact and sun shadows under vehicles, wet-road sky reflections and haze; plus the
 //! per-frame light and glow lists.
 
+use super::light_bank::LightBank;
 use super::math::{Rgb, V3, floor, smoothstep, wrap};
 use super::render::{
     FrameView, Glow, Hit, KEY_BACKDROP, KEY_GROUND, KEY_SKY, Light, PrimRef, WHEEL_PART,
@@ -226,37 +227,9 @@ fn fresnel(cos: f32) -> f32 {
     0.04 + 0.96 * m
 }
 
-fn light_from(l: &Light, p: V3, n: V3) -> Rgb {
-    let to = l.pos - p;
-    let d2 = to.dot(to);
-    let r2 = l.range * l.range;
-    if d2 >= r2 {
-        return Rgb::BLACK;
-    }
-    let dist = d2.sqrt().max(1e-3);
-    let ld = to * (1.0 / dist);
-    let ndl = n.dot(ld);
-    if ndl <= 0.0 {
-        return Rgb::BLACK;
-    }
-    let spot = if l.dir == V3::default() {
-        1.0
-    } else {
-        // Brightest on the axis, fading smoothly to nothing at the cone's edge.
-        let c = -ld.dot(l.dir);
-        let k = ((c - l.cos_outer) / (1.0 - l.cos_outer)).clamp(0.0, 1.0);
-        k * k
-    };
-    if spot <= 0.0 {
-        return Rgb::BLACK;
-    }
-    let fade = (1.0 - d2 / r2) * (1.0 - d2 / r2);
-    // A lamp is not a point: soften the near field.
-    l.colour * (ndl * spot * fade / (d2 + 9.0))
-}
-
-/// Shades the hit of camera ray `dir` in `tile`.
-pub fn shade(view: &FrameView, hit: &Hit, dir: V3, tile: usize) -> Shaded {
+/// Shades the hit of camera ray `dir` in `tile`, lit at night by `lights` (which must hold
+/// every light that reaches the hit).
+pub fn shade(view: &FrameView, hit: &Hit, dir: V3, tile: usize, lights: &LightBank) -> Shaded {
     let world = view.world;
     let l = &world.lighting;
     match hit.key {
@@ -326,10 +299,7 @@ pub fn shade(view: &FrameView, hit: &Hit, dir: V3, tile: usize) -> Shaded {
         irr += l.sun * (wrapped * sun_vis);
     }
     if l.night {
-        for &li in view.tile_lights(tile) {
-            irr += light_from(&view.lights[li as usize], p_rel, normal);
-        }
-        irr += light_from(&view.world.ego_headlight(&view.cam), p_rel, normal);
+        lights.add_irradiance(&mut irr, p_rel, normal);
     }
     let mut rgb = surface.albedo.tint(irr) + surface.emissive;
     if surface.gloss > 0.0 {
@@ -925,56 +895,4 @@ fn vehicle_surface(view: &FrameView, i: usize, hit: &Hit, fu: f32, fw: f32) -> S
         }
     }
     s
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::synth::rng::Rng;
-
-    /// Tiles are binned by `Light::reach_box`: a light must add nothing outside it.
-    #[test]
-    fn lights_add_nothing_outside_their_reach_box() {
-        let mut rng = Rng::new(7);
-        let headlight = Light {
-            pos: V3::new(3.0, -1.0, 0.7),
-            colour: Rgb::new(1.0, 1.0, 1.0),
-            dir: V3::new(0.6, 0.8, -0.06).normalized(),
-            cos_outer: 0.86,
-            range: 35.0,
-        };
-        let lamp = Light {
-            pos: V3::new(0.0, 4.0, 8.0),
-            colour: Rgb::new(1.0, 1.0, 1.0),
-            dir: V3::new(0.0, 0.0, -1.0),
-            cos_outer: 0.2,
-            range: 20.0,
-        };
-        for l in [headlight, lamp] {
-            let (lo, hi) = l.reach_box();
-            // The cone cuts the box well below the range cube.
-            let volume = (hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
-            assert!(volume < 0.75 * (2.0 * l.range).powi(3), "{volume}");
-            let (mut lit, mut outside) = (0, 0);
-            for _ in 0..20_000 {
-                let p = l.pos
-                    + V3::new(
-                        rng.range(-1.2, 1.2),
-                        rng.range(-1.2, 1.2),
-                        rng.range(-1.2, 1.2),
-                    ) * l.range;
-                let n = (l.pos - p).normalized();
-                let inside = (lo.x..=hi.x).contains(&p.x)
-                    && (lo.y..=hi.y).contains(&p.y)
-                    && (lo.z..=hi.z).contains(&p.z);
-                if light_from(&l, p, n) != Rgb::BLACK {
-                    lit += 1;
-                    assert!(inside, "{p:?} is lit outside {lo:?}..{hi:?}");
-                } else if !inside {
-                    outside += 1;
-                }
-            }
-            assert!(lit > 100 && outside > 1000, "{lit} lit, {outside} culled");
-        }
-    }
 }
