@@ -56,6 +56,17 @@ struct Band<'a> {
     id: &'a mut [u16],
 }
 
+impl Band<'_> {
+    /// Stores the shading of pixel `i` of the band.
+    #[inline]
+    fn put(&mut self, i: usize, s: shade::Shaded) {
+        self.rgb[i] = s.rgb;
+        self.semantic[i] = s.semantic;
+        self.tag[i] = s.tag;
+        self.id[i] = s.id;
+    }
+}
+
 /// Ray-casts every pixel of `view`; shades them too when `with_shading`.
 pub fn cast(view: &FrameView, with_shading: bool) -> (GBuffer, Option<Shading>) {
     let w = view.cam.width as usize;
@@ -96,67 +107,71 @@ pub fn cast(view: &FrameView, with_shading: bool) -> (GBuffer, Option<Shading>) 
     // A pixel's ray shares its horizontal components with its column and the rest with its
     // row: computed once each instead of per pixel.
     let columns: Vec<(f32, f32)> = (0..w).map(|x| cam.ray_xy(x as f32 + 0.5)).collect();
-    let night = view.world.lighting.night;
-    bands.into_par_iter().enumerate().for_each(|(band, out)| {
-        let band_rows = out.key.len() / w;
-        let mut hits: Vec<(usize, Hit, V3)> = Vec::with_capacity(TILE * TILE);
-        let mut reaching = Vec::new();
-        let mut bank = LightBank::default();
-        // Tile by tile, so that each tile's primitive list is fetched once and the previous
-        // pixel's ground point seeds the Frenet inversion of the next. A tile is traced
-        // before it is shaded: the box around its surface points tells which of its lights
-        // can reach any of them.
-        for tx in 0..tiles_x {
-            let tile = band * tiles_x + tx;
-            let x_end = ((tx + 1) * TILE).min(w);
-            let mut lo = V3::new(f32::INFINITY, f32::INFINITY, f32::INFINITY);
-            let mut hi = V3::new(f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY);
-            for r in 0..band_rows {
-                let y = band * TILE + r;
-                let v = y as f32 + 0.5;
-                let dir_z = cam.ray_z(v);
-                let planes = view.plane_hits(dir_z);
-                let mut s_hint = None;
-                for (x, &(dir_x, dir_y)) in columns.iter().enumerate().take(x_end).skip(tx * TILE) {
-                    let i = r * w + x;
-                    let u = x as f32 + 0.5;
-                    let dir = V3::new(dir_x, dir_y, dir_z);
-                    let hit = view.trace_planes(dir, planes, u, v, tile, s_hint);
-                    s_hint = (hit.key == KEY_GROUND).then_some(hit.local.x);
-                    out.key[i] = hit.key;
-                    out.part[i] = hit.part;
-                    out.depth[i] = hit.t;
-                    // Camera-relative surface point, as shading computes it.
-                    let p = cam.origin() + dir * hit.t;
-                    out.point[i] = match hit.key {
-                        KEY_SKY | KEY_BACKDROP => dir,
-                        k if k & KEY_VEHICLE != 0 => hit.local,
-                        _ => V3::new(cam.x + p.x, cam.y + p.y, p.z),
-                    };
-                    if with_shading {
-                        if !matches!(hit.key, KEY_SKY | KEY_BACKDROP) {
-                            lo = lo.min(p);
-                            hi = hi.max(p);
+    // At night a tile is traced before it is shaded: the box around its surface points
+    // tells which of its lights can reach any of them. By day each pixel is shaded as soon
+    // as it is traced.
+    let deferred = with_shading && view.world.lighting.night;
+    bands
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(band, mut out)| {
+            let band_rows = out.key.len() / w;
+            let mut hits: Vec<(usize, Hit, V3)> = Vec::new();
+            let mut reaching = Vec::new();
+            let mut bank = LightBank::default();
+            // Tile by tile, so that each tile's primitive list is fetched once and the previous
+            // pixel's ground point seeds the Frenet inversion of the next.
+            for tx in 0..tiles_x {
+                let tile = band * tiles_x + tx;
+                let x_end = ((tx + 1) * TILE).min(w);
+                let mut lo = V3::new(f32::INFINITY, f32::INFINITY, f32::INFINITY);
+                let mut hi = V3::new(f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY);
+                for r in 0..band_rows {
+                    let y = band * TILE + r;
+                    let v = y as f32 + 0.5;
+                    let dir_z = cam.ray_z(v);
+                    let planes = view.plane_hits(dir_z);
+                    let mut s_hint = None;
+                    for (x, &(dir_x, dir_y)) in
+                        columns.iter().enumerate().take(x_end).skip(tx * TILE)
+                    {
+                        let i = r * w + x;
+                        let u = x as f32 + 0.5;
+                        let dir = V3::new(dir_x, dir_y, dir_z);
+                        let hit = view.trace_planes(dir, planes, u, v, tile, s_hint);
+                        s_hint = (hit.key == KEY_GROUND).then_some(hit.local.x);
+                        out.key[i] = hit.key;
+                        out.part[i] = hit.part;
+                        out.depth[i] = hit.t;
+                        out.point[i] = match hit.key {
+                            KEY_SKY | KEY_BACKDROP => dir,
+                            k if k & KEY_VEHICLE != 0 => hit.local,
+                            _ => {
+                                let p = cam.origin() + dir * hit.t;
+                                V3::new(cam.x + p.x, cam.y + p.y, p.z)
+                            }
+                        };
+                        if deferred {
+                            if !matches!(hit.key, KEY_SKY | KEY_BACKDROP) {
+                                // The camera-relative point that shading lights.
+                                let p = cam.origin() + dir * hit.t;
+                                lo = lo.min(p);
+                                hi = hi.max(p);
+                            }
+                            hits.push((i, hit, dir));
+                        } else if with_shading {
+                            out.put(i, shade::shade(view, &hit, dir, tile, &bank));
                         }
-                        hits.push((i, hit, dir));
+                    }
+                }
+                if deferred {
+                    bank.fill(view, view.lights_reaching(tile, lo, hi, &mut reaching));
+                    for (i, hit, dir) in hits.drain(..) {
+                        out.put(i, shade::shade(view, &hit, dir, tile, &bank));
                     }
                 }
             }
-            if !with_shading {
-                continue;
-            }
-            if night {
-                bank.fill(view, view.lights_reaching(tile, lo, hi, &mut reaching));
-            }
-            for (i, hit, dir) in hits.drain(..) {
-                let s = shade::shade(view, &hit, dir, tile, &bank);
-                out.rgb[i] = s.rgb;
-                out.semantic[i] = s.semantic;
-                out.tag[i] = s.tag;
-                out.id[i] = s.id;
-            }
-        }
-    });
+        });
     if with_shading {
         antialias_edges(view, &key, &part, &mut hdr);
     }
