@@ -23,6 +23,8 @@ fn bench(c: &mut Criterion) {
     for (name, domain, weather) in [
         ("city_sun", Domain::City, Weather::Sun),
         ("highway_rain", Domain::Highway, Weather::Rain),
+        // The slowest condition: lamps and headlights light every pixel they reach.
+        ("city_night", Domain::City, Weather::Night),
     ] {
         let s = spec(domain, weather);
         let scenario = Scenario::build(&s).expect("build");
