@@ -68,7 +68,7 @@ impl LightBank {
         self.len += 1;
     }
 
-    /// Adds the light of every lamp of the bank, in order, to `irr` at camera-relative
+    /// Adds the light of every light of the bank, in order, to `irr` at camera-relative
     /// point `p` with unit normal `n`.
     pub fn add_irradiance(&self, irr: &mut Rgb, p: V3, n: V3) {
         for lanes in &self.lanes {
@@ -121,6 +121,21 @@ mod tests {
         }
     }
 
+    /// A point with every coordinate drawn uniformly from `lo..hi`.
+    fn random_point(rng: &mut Rng, lo: V3, hi: V3) -> V3 {
+        V3::new(
+            rng.range(lo.x, hi.x),
+            rng.range(lo.y, hi.y),
+            rng.range(lo.z, hi.z),
+        )
+    }
+
+    /// A point of the cube of half side `k` ranges around the light.
+    fn near(rng: &mut Rng, l: &Light, k: f32) -> V3 {
+        let e = V3::new(k, k, k);
+        l.pos + random_point(rng, -e, e) * l.range
+    }
+
     fn lit(l: &Light, p: V3, n: V3) -> bool {
         let mut irr = Rgb::BLACK;
         LightBank::of(std::slice::from_ref(l)).add_irradiance(&mut irr, p, n);
@@ -158,12 +173,7 @@ mod tests {
             assert!(volume < 0.75 * (2.0 * l.range).powi(3), "{volume}");
             let (mut lit_points, mut outside) = (0, 0);
             for _ in 0..20_000 {
-                let p = l.pos
-                    + V3::new(
-                        rng.range(-1.2, 1.2),
-                        rng.range(-1.2, 1.2),
-                        rng.range(-1.2, 1.2),
-                    ) * l.range;
+                let p = near(&mut rng, &l, 1.2);
                 let n = (l.pos - p).normalized();
                 let inside = (lo.x..=hi.x).contains(&p.x)
                     && (lo.y..=hi.y).contains(&p.y)
@@ -190,17 +200,8 @@ mod tests {
         let (mut rejected, mut accepted) = (0, 0);
         for l in [headlight(), lamp()] {
             for _ in 0..400 {
-                let centre = l.pos
-                    + V3::new(
-                        rng.range(-1.1, 1.1),
-                        rng.range(-1.1, 1.1),
-                        rng.range(-1.1, 1.1),
-                    ) * l.range;
-                let half = V3::new(
-                    rng.range(0.1, 4.0),
-                    rng.range(0.1, 4.0),
-                    rng.range(0.1, 4.0),
-                );
+                let centre = near(&mut rng, &l, 1.1);
+                let half = random_point(&mut rng, V3::new(0.1, 0.1, 0.1), V3::new(4.0, 4.0, 4.0));
                 let (lo, hi) = (centre - half, centre + half);
                 if l.may_reach(lo, hi) {
                     accepted += 1;
@@ -208,11 +209,7 @@ mod tests {
                 }
                 rejected += 1;
                 for _ in 0..200 {
-                    let p = V3::new(
-                        rng.range(lo.x, hi.x),
-                        rng.range(lo.y, hi.y),
-                        rng.range(lo.z, hi.z),
-                    );
+                    let p = random_point(&mut rng, lo, hi);
                     let n = (l.pos - p).normalized();
                     assert!(!lit(&l, p, n), "{p:?} lit in rejected box {lo:?}..{hi:?}");
                 }
