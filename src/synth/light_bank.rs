@@ -71,7 +71,7 @@ impl LightBank {
     /// Adds the light of every light of the bank, in order, to `irr` at camera-relative
     /// point `p` with unit normal `n`.
     pub fn add_irradiance(&self, irr: &mut Rgb, p: V3, n: V3) {
-        for lanes in &self.lanes {
+        for (g, lanes) in self.lanes.iter().enumerate() {
             let mut f = [0.0f32; LANES];
             // Branch-free, lane by lane, so that the compiler evaluates the lanes as vectors.
             for (j, f) in f.iter_mut().enumerate() {
@@ -94,8 +94,10 @@ impl LightBank {
                 *f = if lit { v } else { 0.0 };
             }
             // Summed one light after the other: the order of a scalar loop, so the bits do
-            // not depend on how the lanes were grouped. An unlit lane adds exactly zero.
-            for (j, &f) in f.iter().enumerate() {
+            // not depend on how the lanes were grouped. An unlit lane adds exactly zero, so
+            // the unused lanes of the last group are left out of the sum.
+            let used = (self.len - g * LANES).min(LANES);
+            for (j, &f) in f.iter().enumerate().take(used) {
                 *irr += Rgb::new(
                     lanes.colour[0][j] * f,
                     lanes.colour[1][j] * f,
