@@ -1,6 +1,7 @@
 //! Generator speed at AnoVox's 768×512: rendering frames with every modality in memory
 //! (ray casting, shading, anti-aliasing, exact flow, labels), and rendering plus writing a
 //! scenario folder through `ScenarioWriter`. Throughput is reported in frames per second.
+//! The process keeps freed frame buffers, as `vadscope generate` does.
 
 use std::hint::black_box;
 
@@ -17,6 +18,7 @@ fn spec(domain: Domain, weather: Weather) -> ScenarioSpec {
 }
 
 fn bench(c: &mut Criterion) {
+    vadscope::synth::keep_freed_frame_buffers();
     let mut group = c.benchmark_group("synth_768x512");
     group.sample_size(10);
     group.throughput(Throughput::Elements(FRAMES as u64));

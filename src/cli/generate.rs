@@ -92,7 +92,7 @@ fn request_of(args: &GenerateArgs) -> DatasetRequest {
 
 /// Runs `vadscope generate`.
 pub fn run(args: GenerateArgs) -> anyhow::Result<ExitCode> {
-    super::heap::keep_freed_frame_buffers();
+    vadscope::synth::keep_freed_frame_buffers();
     let specs = plan_dataset(&request_of(&args))?;
     for spec in &specs {
         let dir = args.out.join(format!("Scenario_{}", spec.name));

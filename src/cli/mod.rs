@@ -7,7 +7,6 @@ mod eval;
 mod export;
 mod flow;
 mod generate;
-mod heap;
 mod inspect;
 mod labels;
 mod render;

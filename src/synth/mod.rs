@@ -20,6 +20,7 @@
 //! - Writing: [`generate_scenario`]`(&spec, out_dir, on_frame)` writes
 //!   `out_dir/Scenario_<name>/` and calls `on_frame(frame)` as frames are written (frames are
 //!   rendered in parallel chunks, so the calls come from several threads in any order).
+//!   A process that streams many frames calls [`keep_freed_frame_buffers`] once first.
 //! - In memory: [`Scenario::build`] simulates; [`Scenario::render_frame`],
 //!   [`Scenario::render_range`] and [`Scenario::render_all`] return `FrameRecord`s;
 //!   [`Scenario::traffic`] exposes every vehicle's per-frame state and
@@ -45,6 +46,7 @@ mod camera;
 mod error;
 mod flow;
 mod frame;
+mod heap_policy;
 mod labels;
 mod light_bank;
 mod lighting;
@@ -62,6 +64,7 @@ mod traffic;
 mod vehicle;
 
 pub use error::SynthError;
+pub use heap_policy::keep_freed_frame_buffers;
 pub use scenario::{GENERATOR_NAME, Scenario, generate_scenario, generate_scenario_without};
 pub use spec::{
     DEFAULT_FRAMES, DEFAULT_HEIGHT, DEFAULT_WIDTH, DatasetPlan, DatasetRequest, DomainChoice,

@@ -1,11 +1,13 @@
-//! Heap policy for `vadscope generate`, which streams frames of tens of megabytes.
+//! The generator's heap policy: `vadscope generate` and the generator benchmark stream
+//! frames of tens of megabytes.
 //!
 //! glibc's malloc hands the free top of its heaps back to the kernel (above a threshold of a
 //! few megabytes by default), so every generated 768×512 frame faults its ~40 MB of buffers
 //! back in, page by page, zeroed by the kernel: about 5 % of the generator's CPU time.
 //! Raising the thresholds keeps those pages in the process from one frame to the next. The
 //! memory kept is what the frames in flight use anyway, and it goes back when the process
-//! ends; commands that stay open (the viewer) keep glibc's defaults.
+//! ends; commands that stay open (the viewer) keep glibc's defaults, which is why the
+//! library never sets it on its own.
 
 /// Largest mmap threshold glibc accepts (half its 64 MiB heap size on 64-bit): allocations
 /// up to this size come from the heap and are reused instead of mapped and unmapped.
