@@ -34,7 +34,7 @@ pub fn refusal(missing: &[&str]) -> String {
     format!(
         "this vadscope was built for x86-64-v3, but this CPU lacks {}; rebuild it for \
          the baseline with `RUSTFLAGS=\"-C target-cpu=x86-64\" cargo build --release` \
-         (the scenario generator then runs about 10 % slower)",
+         (the scenario generator then runs 5-10 % slower)",
         missing.join(", ")
     )
 }
