@@ -113,6 +113,16 @@ pub struct PlaneHits {
     raised: f32,
 }
 
+/// Where a nearby ray of the same image row met the ground: the start of the next ray's
+/// Frenet inversion.
+#[derive(Debug, Clone, Copy)]
+pub struct GroundHint {
+    /// Expected arc length of the next ray's ground point.
+    pub s: f32,
+    /// Whether the nearby ray landed on the raised sidewalk level.
+    pub raised: bool,
+}
+
 /// A light source for night scenes, camera-relative.
 #[derive(Debug, Clone, Copy)]
 pub struct Light {
@@ -670,7 +680,7 @@ impl<'w> FrameView<'w> {
     }
 
     /// Intersection with the ground: road plane, raised sidewalks and kerb faces.
-    fn ground(&self, dir: V3, planes: PlaneHits, s_hint: Option<f32>) -> Option<Hit> {
+    fn ground(&self, dir: V3, planes: PlaneHits, hint: Option<GroundHint>) -> Option<Hit> {
         if dir.z >= -1e-6 {
             return None;
         }
@@ -686,20 +696,42 @@ impl<'w> FrameView<'w> {
             normal,
         };
         let up = V3::new(0.0, 0.0, 1.0);
+        let s_hint = hint.map(|g| g.s);
         if road.kerb_height <= 0.0 {
             let (s, d) = self.frenet_at(dir, t0, s_hint);
             return Some(make(t0, s, d, 0.0, 0, up));
         }
         let kh = road.kerb_height;
         let t1 = planes.raised;
-        let (s1, d1) = self.frenet_at(dir, t1, s_hint);
-        if road.is_raised(s1, d1) {
-            return Some(make(t1, s1, d1, kh, 0, up));
-        }
         // Along the ray, s grows by about the horizontal distance travelled along the road.
         let (tx, ty) = self.road_tangent;
         let ds_dt = dir.x * tx + dir.y * ty;
-        let (s0, d0) = self.frenet_at(dir, t0, Some(s1 + (t0 - t1) * ds_dt));
+        // A row's neighbours mostly lie on one level: the level of the previous pixel is
+        // tried first, so that most pixels invert their Frenet coordinates once.
+        let road_first = hint.is_none_or(|g| !g.raised);
+        let mut at_floor = None;
+        if road_first {
+            let (s0, d0) = self.frenet_at(dir, t0, s_hint);
+            // Between the raised plane and the road plane the ray moves this far sideways
+            // at most (the distance to the centre line changes no faster than the point;
+            // the margin covers the inversion's tolerance).
+            let drift = (t0 - t1) * (dir.x * dir.x + dir.y * dir.y).sqrt() + 0.01;
+            if d0.abs() + drift < road.road_half {
+                // Inside the carriageway at both planes: the raised level cannot be hit.
+                return Some(make(t0, s0, d0, 0.0, 0, up));
+            }
+            at_floor = Some((s0, d0));
+        }
+        let s1_hint = match (at_floor, s_hint) {
+            (Some((s0, _)), _) => Some(s0 - (t0 - t1) * ds_dt),
+            (None, hint) => hint,
+        };
+        let (s1, d1) = self.frenet_at(dir, t1, s1_hint);
+        if road.is_raised(s1, d1) {
+            return Some(make(t1, s1, d1, kh, 0, up));
+        }
+        let (s0, d0) =
+            at_floor.unwrap_or_else(|| self.frenet_at(dir, t0, Some(s1 + (t0 - t1) * ds_dt)));
         if !road.is_raised(s0, d0) {
             return Some(make(t0, s0, d0, 0.0, 0, up));
         }
@@ -726,10 +758,17 @@ impl<'w> FrameView<'w> {
         self.trace_in_tile(dir, u, v, self.tile_of(u, v), None)
     }
 
-    /// [`FrameView::trace`] for a point known to lie in `tile`; `s_hint` is the arc length of
-    /// a nearby ground point (speeds up the Frenet inversion, same result).
-    pub fn trace_in_tile(&self, dir: V3, u: f32, v: f32, tile: usize, s_hint: Option<f32>) -> Hit {
-        self.trace_planes(dir, self.plane_hits(dir.z), u, v, tile, s_hint)
+    /// [`FrameView::trace`] for a point known to lie in `tile`; `hint` tells where a nearby
+    /// ray met the ground (it speeds up the Frenet inversion).
+    pub fn trace_in_tile(
+        &self,
+        dir: V3,
+        u: f32,
+        v: f32,
+        tile: usize,
+        hint: Option<GroundHint>,
+    ) -> Hit {
+        self.trace_planes(dir, self.plane_hits(dir.z), u, v, tile, hint)
     }
 
     /// Where a camera ray with vertical component `dir_z` meets the road plane and the
@@ -759,7 +798,7 @@ impl<'w> FrameView<'w> {
         u: f32,
         v: f32,
         tile: usize,
-        s_hint: Option<f32>,
+        hint: Option<GroundHint>,
     ) -> Hit {
         // The ground lies between the raised-sidewalk plane and the road plane along the
         // ray; objects nearer than the former hide it, so it is only resolved when needed.
@@ -804,7 +843,7 @@ impl<'w> FrameView<'w> {
             }
         }
         if (hit.key == KEY_SKY || hit.t >= t_raised)
-            && let Some(g) = self.ground(dir, planes, s_hint)
+            && let Some(g) = self.ground(dir, planes, hint)
             && (hit.key == KEY_SKY || g.t < hit.t)
         {
             return g;

@@ -87,6 +87,12 @@ pub struct Scenario {
 }
 
 impl Scenario {
+    /// The world, for the renderer's unit tests.
+    #[cfg(test)]
+    pub(super) fn world(&self) -> &World {
+        &self.world
+    }
+
     /// Builds the world and simulates the traffic of `spec`.
     pub fn build(spec: &ScenarioSpec) -> Result<Self, SynthError> {
         spec.validate()?;
