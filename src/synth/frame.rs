@@ -122,7 +122,7 @@ pub fn cast(view: &FrameView, with_shading: bool) -> (GBuffer, Option<Shading>) 
             let mut reaching = Vec::new();
             let mut bank = LightBank::default();
             // Tile by tile, so that each tile's primitive list is fetched once and the previous
-            // pixel's ground point seeds the Frenet inversion of the next.
+            // pixels' ground points seed the Frenet inversion of the next.
             for tx in 0..tiles_x {
                 let tile = band * tiles_x + tx;
                 let x_end = ((tx + 1) * TILE).min(w);

@@ -703,9 +703,6 @@ impl<'w> FrameView<'w> {
         }
         let kh = road.kerb_height;
         let t1 = planes.raised;
-        // Along the ray, s grows by about the horizontal distance travelled along the road.
-        let (tx, ty) = self.road_tangent;
-        let ds_dt = dir.x * tx + dir.y * ty;
         // A row's neighbours mostly lie on one level: the level of the previous pixel is
         // tried first, so that most pixels invert their Frenet coordinates once.
         let road_first = hint.is_none_or(|g| !g.raised);
@@ -722,10 +719,10 @@ impl<'w> FrameView<'w> {
             }
             at_floor = Some((s0, d0));
         }
-        let s1_hint = match (at_floor, s_hint) {
-            (Some((s0, _)), _) => Some(s0 - (t0 - t1) * ds_dt),
-            (None, hint) => hint,
-        };
+        // Along the ray, s grows by about the horizontal distance travelled along the road.
+        let (tx, ty) = self.road_tangent;
+        let ds_dt = dir.x * tx + dir.y * ty;
+        let s1_hint = at_floor.map_or(s_hint, |(s0, _)| Some(s0 - (t0 - t1) * ds_dt));
         let (s1, d1) = self.frenet_at(dir, t1, s1_hint);
         if road.is_raised(s1, d1) {
             return Some(make(t1, s1, d1, kh, 0, up));
