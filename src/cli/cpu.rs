@@ -1,10 +1,11 @@
 //! The instruction-set guard: refuses to start, with a message that says how to rebuild, on
 //! an x86-64 CPU that lacks an extension the build was compiled for.
 //!
-//! `.cargo/config.toml` builds for `x86-64-v3` (AVX2, FMA, BMI1/2, F16C, LZCNT, MOVBE).
-//! Without this check such a binary dies of SIGILL somewhere inside the first hot loop. The
-//! features are read with CPUID directly: `is_x86_feature_detected!` answers `true` at
-//! compile time for every feature the build enables, so it cannot tell.
+//! `.cargo/config.toml` builds for the CPU of the machine that compiles (`target-cpu=native`):
+//! AVX2 and FMA on any x86-64 CPU of the last decade, AVX-512 where the CPU has it. A binary
+//! copied to a CPU without one of those extensions would die of SIGILL somewhere inside the
+//! first hot loop. The features are read with CPUID directly: `is_x86_feature_detected!`
+//! answers `true` at compile time for every feature the build enables, so it cannot tell.
 
 /// The extensions this build requires that the CPU lacks, by their `target_feature` names;
 /// empty when it may run (always on other architectures).
@@ -32,9 +33,11 @@ fn missing_of(extensions: &[(&'static str, bool, bool)]) -> Vec<&'static str> {
 /// The message for a CPU that lacks `missing`.
 pub fn refusal(missing: &[&str]) -> String {
     format!(
-        "this vadscope was built for x86-64-v3, but this CPU lacks {}; rebuild it for \
-         the baseline with `RUSTFLAGS=\"-C target-cpu=x86-64\" cargo build --release` \
-         (the scenario generator then runs 5-10 % slower)",
+        "this vadscope was built for another CPU (`target-cpu=native` in .cargo/config.toml \
+         builds for the machine that compiles), and this CPU lacks {}; rebuild it on this \
+         machine with `cargo build --release`, or for any x86-64 CPU with \
+         `RUSTFLAGS=\"-C target-cpu=x86-64\" cargo build --release` (the scenario generator \
+         then runs 10-20 % slower)",
         missing.join(", ")
     )
 }
@@ -43,14 +46,19 @@ pub fn refusal(missing: &[&str]) -> String {
 mod x86 {
     use std::arch::x86_64::{__cpuid, __cpuid_count};
 
-    /// Each x86-64-v3 extension: its name, whether the build uses it, whether the CPU (and,
-    /// for the AVX family, the operating system) provides it.
-    pub fn required() -> [(&'static str, bool, bool); 8] {
+    /// Each extension the compiler may use on its own: its name, whether the build uses
+    /// it, whether the CPU (and, for the AVX families, the operating system) provides it.
+    pub fn required() -> Vec<(&'static str, bool, bool)> {
         // Leaves above the reported maximum are not queried.
         let (max_leaf, max_ext) = (__cpuid(0).eax, __cpuid(0x8000_0000).eax);
         let leaf1 = __cpuid(1);
         let leaf7 = if max_leaf >= 7 {
             __cpuid_count(7, 0)
+        } else {
+            empty_leaf()
+        };
+        let leaf7_1 = if max_leaf >= 7 && leaf7.eax >= 1 {
+            __cpuid_count(7, 1)
         } else {
             empty_leaf()
         };
@@ -60,15 +68,18 @@ mod x86 {
             empty_leaf()
         };
         let bit = |reg: u32, n: u32| reg & (1 << n) != 0;
-        let os_saves_ymm = bit(leaf1.ecx, 27) && ymm_state_enabled();
-        let avx = bit(leaf1.ecx, 28) && os_saves_ymm;
-        [
+        let xcr0 = if bit(leaf1.ecx, 27) {
+            extended_state()
+        } else {
+            0
+        };
+        // XCR0: SSE and AVX state (bits 1, 2); AVX-512 opmask and upper ZMM state (5-7).
+        let avx = bit(leaf1.ecx, 28) && xcr0 & 0b110 == 0b110;
+        let avx512 = avx && xcr0 & 0b1110_0000 == 0b1110_0000;
+        let (b7, c7, d7, a7_1) = (leaf7.ebx, leaf7.ecx, leaf7.edx, leaf7_1.eax);
+        vec![
             ("avx", cfg!(target_feature = "avx"), avx),
-            (
-                "avx2",
-                cfg!(target_feature = "avx2"),
-                avx && bit(leaf7.ebx, 5),
-            ),
+            ("avx2", cfg!(target_feature = "avx2"), avx && bit(b7, 5)),
             (
                 "fma",
                 cfg!(target_feature = "fma"),
@@ -79,10 +90,87 @@ mod x86 {
                 cfg!(target_feature = "f16c"),
                 avx && bit(leaf1.ecx, 29),
             ),
-            ("bmi1", cfg!(target_feature = "bmi1"), bit(leaf7.ebx, 3)),
-            ("bmi2", cfg!(target_feature = "bmi2"), bit(leaf7.ebx, 8)),
+            ("bmi1", cfg!(target_feature = "bmi1"), bit(b7, 3)),
+            ("bmi2", cfg!(target_feature = "bmi2"), bit(b7, 8)),
             ("lzcnt", cfg!(target_feature = "lzcnt"), bit(ext1.ecx, 5)),
             ("movbe", cfg!(target_feature = "movbe"), bit(leaf1.ecx, 22)),
+            (
+                "avxvnni",
+                cfg!(target_feature = "avxvnni"),
+                avx && bit(a7_1, 4),
+            ),
+            ("gfni", cfg!(target_feature = "gfni"), bit(c7, 8)),
+            ("vaes", cfg!(target_feature = "vaes"), avx && bit(c7, 9)),
+            (
+                "vpclmulqdq",
+                cfg!(target_feature = "vpclmulqdq"),
+                avx && bit(c7, 10),
+            ),
+            (
+                "avx512f",
+                cfg!(target_feature = "avx512f"),
+                avx512 && bit(b7, 16),
+            ),
+            (
+                "avx512dq",
+                cfg!(target_feature = "avx512dq"),
+                avx512 && bit(b7, 17),
+            ),
+            (
+                "avx512ifma",
+                cfg!(target_feature = "avx512ifma"),
+                avx512 && bit(b7, 21),
+            ),
+            (
+                "avx512cd",
+                cfg!(target_feature = "avx512cd"),
+                avx512 && bit(b7, 28),
+            ),
+            (
+                "avx512bw",
+                cfg!(target_feature = "avx512bw"),
+                avx512 && bit(b7, 30),
+            ),
+            (
+                "avx512vl",
+                cfg!(target_feature = "avx512vl"),
+                avx512 && bit(b7, 31),
+            ),
+            (
+                "avx512vbmi",
+                cfg!(target_feature = "avx512vbmi"),
+                avx512 && bit(c7, 1),
+            ),
+            (
+                "avx512vbmi2",
+                cfg!(target_feature = "avx512vbmi2"),
+                avx512 && bit(c7, 6),
+            ),
+            (
+                "avx512vnni",
+                cfg!(target_feature = "avx512vnni"),
+                avx512 && bit(c7, 11),
+            ),
+            (
+                "avx512bitalg",
+                cfg!(target_feature = "avx512bitalg"),
+                avx512 && bit(c7, 12),
+            ),
+            (
+                "avx512vpopcntdq",
+                cfg!(target_feature = "avx512vpopcntdq"),
+                avx512 && bit(c7, 14),
+            ),
+            (
+                "avx512fp16",
+                cfg!(target_feature = "avx512fp16"),
+                avx512 && bit(d7, 23),
+            ),
+            (
+                "avx512bf16",
+                cfg!(target_feature = "avx512bf16"),
+                avx512 && bit(a7_1, 5),
+            ),
         ]
     }
 
@@ -95,9 +183,9 @@ mod x86 {
         }
     }
 
-    /// Whether the operating system saves the SSE and AVX registers on a context switch
-    /// (XCR0 bits 1 and 2); only asked once CPUID reports OSXSAVE.
-    fn ymm_state_enabled() -> bool {
+    /// The register states the operating system saves on a context switch (XCR0); only
+    /// asked once CPUID reports OSXSAVE.
+    fn extended_state() -> u64 {
         let (lo, hi): (u32, u32);
         // SAFETY: XGETBV is available when CPUID.1:ECX.OSXSAVE is set, which the caller
         // checks first; it reads a register and touches no memory.
@@ -110,8 +198,7 @@ mod x86 {
                 options(nomem, nostack, preserves_flags),
             );
         }
-        let xcr0 = (u64::from(hi) << 32) | u64::from(lo);
-        xcr0 & 0b110 == 0b110
+        (u64::from(hi) << 32) | u64::from(lo)
     }
 }
 
@@ -140,6 +227,7 @@ mod tests {
     fn the_refusal_names_what_is_missing_and_how_to_rebuild() {
         let message = refusal(&["avx2", "fma"]);
         assert!(message.contains("avx2, fma"), "{message}");
+        assert!(message.contains("cargo build --release`"), "{message}");
         assert!(message.contains("target-cpu=x86-64\""), "{message}");
     }
 }
