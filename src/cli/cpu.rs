@@ -46,8 +46,9 @@ pub fn refusal(missing: &[&str]) -> String {
 mod x86 {
     use std::arch::x86_64::{__cpuid, __cpuid_count};
 
-    /// Each extension the compiler may use on its own: its name, whether the build uses
-    /// it, whether the CPU (and, for the AVX families, the operating system) provides it.
+    /// Each extension the compiler or a dependency's compile-time dispatch may use: its
+    /// name, whether the build uses it, whether the CPU (and, for the AVX families, the
+    /// operating system) provides it.
     pub fn required() -> Vec<(&'static str, bool, bool)> {
         // Leaves above the reported maximum are not queried.
         let (max_leaf, max_ext) = (__cpuid(0).eax, __cpuid(0x8000_0000).eax);
@@ -68,32 +69,30 @@ mod x86 {
             empty_leaf()
         };
         let bit = |reg: u32, n: u32| reg & (1 << n) != 0;
-        let xcr0 = if bit(leaf1.ecx, 27) {
-            extended_state()
-        } else {
-            0
-        };
+        let c1 = leaf1.ecx;
+        let xcr0 = if bit(c1, 27) { extended_state() } else { 0 };
         // XCR0: SSE and AVX state (bits 1, 2); AVX-512 opmask and upper ZMM state (5-7).
-        let avx = bit(leaf1.ecx, 28) && xcr0 & 0b110 == 0b110;
+        let avx = bit(c1, 28) && xcr0 & 0b110 == 0b110;
         let avx512 = avx && xcr0 & 0b1110_0000 == 0b1110_0000;
         let (b7, c7, d7, a7_1) = (leaf7.ebx, leaf7.ecx, leaf7.edx, leaf7_1.eax);
         vec![
+            ("sse3", cfg!(target_feature = "sse3"), bit(c1, 0)),
+            ("pclmulqdq", cfg!(target_feature = "pclmulqdq"), bit(c1, 1)),
+            ("ssse3", cfg!(target_feature = "ssse3"), bit(c1, 9)),
+            ("sse4.1", cfg!(target_feature = "sse4.1"), bit(c1, 19)),
+            ("sse4.2", cfg!(target_feature = "sse4.2"), bit(c1, 20)),
+            ("popcnt", cfg!(target_feature = "popcnt"), bit(c1, 23)),
+            ("aes", cfg!(target_feature = "aes"), bit(c1, 25)),
+            ("adx", cfg!(target_feature = "adx"), bit(b7, 19)),
+            ("sha", cfg!(target_feature = "sha"), bit(b7, 29)),
             ("avx", cfg!(target_feature = "avx"), avx),
             ("avx2", cfg!(target_feature = "avx2"), avx && bit(b7, 5)),
-            (
-                "fma",
-                cfg!(target_feature = "fma"),
-                avx && bit(leaf1.ecx, 12),
-            ),
-            (
-                "f16c",
-                cfg!(target_feature = "f16c"),
-                avx && bit(leaf1.ecx, 29),
-            ),
+            ("fma", cfg!(target_feature = "fma"), avx && bit(c1, 12)),
+            ("f16c", cfg!(target_feature = "f16c"), avx && bit(c1, 29)),
             ("bmi1", cfg!(target_feature = "bmi1"), bit(b7, 3)),
             ("bmi2", cfg!(target_feature = "bmi2"), bit(b7, 8)),
             ("lzcnt", cfg!(target_feature = "lzcnt"), bit(ext1.ecx, 5)),
-            ("movbe", cfg!(target_feature = "movbe"), bit(leaf1.ecx, 22)),
+            ("movbe", cfg!(target_feature = "movbe"), bit(c1, 22)),
             (
                 "avxvnni",
                 cfg!(target_feature = "avxvnni"),
