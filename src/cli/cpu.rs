@@ -75,101 +75,47 @@ mod x86 {
         let avx = bit(c1, 28) && xcr0 & 0b110 == 0b110;
         let avx512 = avx && xcr0 & 0b1110_0000 == 0b1110_0000;
         let (b7, c7, d7, a7_1) = (leaf7.ebx, leaf7.ecx, leaf7.edx, leaf7_1.eax);
+        // The name is the `target_feature` name, whose `cfg!` says whether the build uses it.
+        macro_rules! row {
+            ($name:literal, $present:expr) => {
+                ($name, cfg!(target_feature = $name), $present)
+            };
+        }
         vec![
-            ("sse3", cfg!(target_feature = "sse3"), bit(c1, 0)),
-            ("pclmulqdq", cfg!(target_feature = "pclmulqdq"), bit(c1, 1)),
-            ("ssse3", cfg!(target_feature = "ssse3"), bit(c1, 9)),
-            ("sse4.1", cfg!(target_feature = "sse4.1"), bit(c1, 19)),
-            ("sse4.2", cfg!(target_feature = "sse4.2"), bit(c1, 20)),
-            ("popcnt", cfg!(target_feature = "popcnt"), bit(c1, 23)),
-            ("aes", cfg!(target_feature = "aes"), bit(c1, 25)),
-            ("adx", cfg!(target_feature = "adx"), bit(b7, 19)),
-            ("sha", cfg!(target_feature = "sha"), bit(b7, 29)),
-            ("avx", cfg!(target_feature = "avx"), avx),
-            ("avx2", cfg!(target_feature = "avx2"), avx && bit(b7, 5)),
-            ("fma", cfg!(target_feature = "fma"), avx && bit(c1, 12)),
-            ("f16c", cfg!(target_feature = "f16c"), avx && bit(c1, 29)),
-            ("bmi1", cfg!(target_feature = "bmi1"), bit(b7, 3)),
-            ("bmi2", cfg!(target_feature = "bmi2"), bit(b7, 8)),
-            ("lzcnt", cfg!(target_feature = "lzcnt"), bit(ext1.ecx, 5)),
-            ("movbe", cfg!(target_feature = "movbe"), bit(c1, 22)),
-            (
-                "avxvnni",
-                cfg!(target_feature = "avxvnni"),
-                avx && bit(a7_1, 4),
-            ),
-            ("gfni", cfg!(target_feature = "gfni"), bit(c7, 8)),
-            ("vaes", cfg!(target_feature = "vaes"), avx && bit(c7, 9)),
-            (
-                "vpclmulqdq",
-                cfg!(target_feature = "vpclmulqdq"),
-                avx && bit(c7, 10),
-            ),
-            (
-                "avx512f",
-                cfg!(target_feature = "avx512f"),
-                avx512 && bit(b7, 16),
-            ),
-            (
-                "avx512dq",
-                cfg!(target_feature = "avx512dq"),
-                avx512 && bit(b7, 17),
-            ),
-            (
-                "avx512ifma",
-                cfg!(target_feature = "avx512ifma"),
-                avx512 && bit(b7, 21),
-            ),
-            (
-                "avx512cd",
-                cfg!(target_feature = "avx512cd"),
-                avx512 && bit(b7, 28),
-            ),
-            (
-                "avx512bw",
-                cfg!(target_feature = "avx512bw"),
-                avx512 && bit(b7, 30),
-            ),
-            (
-                "avx512vl",
-                cfg!(target_feature = "avx512vl"),
-                avx512 && bit(b7, 31),
-            ),
-            (
-                "avx512vbmi",
-                cfg!(target_feature = "avx512vbmi"),
-                avx512 && bit(c7, 1),
-            ),
-            (
-                "avx512vbmi2",
-                cfg!(target_feature = "avx512vbmi2"),
-                avx512 && bit(c7, 6),
-            ),
-            (
-                "avx512vnni",
-                cfg!(target_feature = "avx512vnni"),
-                avx512 && bit(c7, 11),
-            ),
-            (
-                "avx512bitalg",
-                cfg!(target_feature = "avx512bitalg"),
-                avx512 && bit(c7, 12),
-            ),
-            (
-                "avx512vpopcntdq",
-                cfg!(target_feature = "avx512vpopcntdq"),
-                avx512 && bit(c7, 14),
-            ),
-            (
-                "avx512fp16",
-                cfg!(target_feature = "avx512fp16"),
-                avx512 && bit(d7, 23),
-            ),
-            (
-                "avx512bf16",
-                cfg!(target_feature = "avx512bf16"),
-                avx512 && bit(a7_1, 5),
-            ),
+            row!("sse3", bit(c1, 0)),
+            row!("pclmulqdq", bit(c1, 1)),
+            row!("ssse3", bit(c1, 9)),
+            row!("sse4.1", bit(c1, 19)),
+            row!("sse4.2", bit(c1, 20)),
+            row!("popcnt", bit(c1, 23)),
+            row!("aes", bit(c1, 25)),
+            row!("adx", bit(b7, 19)),
+            row!("sha", bit(b7, 29)),
+            row!("avx", avx),
+            row!("avx2", avx && bit(b7, 5)),
+            row!("fma", avx && bit(c1, 12)),
+            row!("f16c", avx && bit(c1, 29)),
+            row!("bmi1", bit(b7, 3)),
+            row!("bmi2", bit(b7, 8)),
+            row!("lzcnt", bit(ext1.ecx, 5)),
+            row!("movbe", bit(c1, 22)),
+            row!("avxvnni", avx && bit(a7_1, 4)),
+            row!("gfni", bit(c7, 8)),
+            row!("vaes", avx && bit(c7, 9)),
+            row!("vpclmulqdq", avx && bit(c7, 10)),
+            row!("avx512f", avx512 && bit(b7, 16)),
+            row!("avx512dq", avx512 && bit(b7, 17)),
+            row!("avx512ifma", avx512 && bit(b7, 21)),
+            row!("avx512cd", avx512 && bit(b7, 28)),
+            row!("avx512bw", avx512 && bit(b7, 30)),
+            row!("avx512vl", avx512 && bit(b7, 31)),
+            row!("avx512vbmi", avx512 && bit(c7, 1)),
+            row!("avx512vbmi2", avx512 && bit(c7, 6)),
+            row!("avx512vnni", avx512 && bit(c7, 11)),
+            row!("avx512bitalg", avx512 && bit(c7, 12)),
+            row!("avx512vpopcntdq", avx512 && bit(c7, 14)),
+            row!("avx512fp16", avx512 && bit(d7, 23)),
+            row!("avx512bf16", avx512 && bit(a7_1, 5)),
         ]
     }
 
