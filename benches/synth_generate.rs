@@ -25,7 +25,8 @@ fn bench(c: &mut Criterion) {
     for (name, domain, weather) in [
         ("city_sun", Domain::City, Weather::Sun),
         ("highway_rain", Domain::Highway, Weather::Rain),
-        // The slowest condition: lamps and headlights light every pixel they reach.
+        // The slowest condition: lamps and headlights light every pixel they reach. Seed
+        // 2024's city-night scene is also heavier than most (docs/perf-history.md).
         ("city_night", Domain::City, Weather::Night),
     ] {
         let s = spec(domain, weather);
