@@ -116,6 +116,31 @@ fn turning_lead_leaves_the_ego_lane() {
     }
 }
 
+/// The shortest recording the spec allows for a turn (120 frames) must work for any seed,
+/// with the lead off the ego lane before the last tenth of it: a city lead may have to turn
+/// at an intersection the road would place too far ahead.
+#[test]
+fn shortest_turning_scenarios_turn_for_every_seed() {
+    for seed in 0..12 {
+        for domain in [Domain::City, Domain::Highway] {
+            let mut s = ScenarioSpec::new(ScenarioKind::Turning, domain, Weather::Sun, seed);
+            (s.width, s.height, s.frames) = (64, 48, 120);
+            let sc = Scenario::build(&s).unwrap_or_else(|e| panic!("{domain:?} seed {seed}: {e}"));
+            let t = sc.traffic();
+            let d0 = t.ego_lane_d;
+            let left = t
+                .states
+                .iter()
+                .position(|st| (st[LEAD].d - d0).abs() > 0.75 * sc.lane_width());
+            assert!(
+                left.is_some_and(|f| f > 10 && f < 108),
+                "{domain:?} seed {seed}: the lead leaves the ego lane at frame {left:?}"
+            );
+            assert!(first_collision(t).is_none(), "{domain:?} seed {seed}");
+        }
+    }
+}
+
 #[test]
 fn cut_in_vehicle_enters_the_ego_lane_ahead_of_the_ego() {
     for seed in 0..3 {

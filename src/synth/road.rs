@@ -383,6 +383,17 @@ impl Road {
         road
     }
 
+    /// Moves every intersection by `ds` along the road, dropping those that leave it.
+    pub fn shift_intersections(&mut self, ds: f32) {
+        let (s0, s1) = (self.centerline.s_start(), self.centerline.s_end());
+        for x in &mut self.intersections {
+            x.s += ds;
+        }
+        self.intersections
+            .retain(|x| x.s > s0 + 20.0 && x.s < s1 - 20.0);
+        self.index_intersections();
+    }
+
     /// Rebuilds the nearest-intersection lookup after `intersections` changed.
     pub fn index_intersections(&mut self) {
         let s0 = self.centerline.s_start();

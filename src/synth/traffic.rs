@@ -363,9 +363,49 @@ struct Script {
 /// Builds the vehicles of a scenario and simulates them. Tries a few seeded variants until
 /// the scenario does what its kind says without violating the dynamics bounds; the road's
 /// light timings may be adjusted (braking and cut-in keep the main road green around the
-/// event).
+/// event), and for a turn in the city its intersections may be moved nearer.
 pub fn simulate(spec: &ScenarioSpec, road: &mut Road, rng: &Rng) -> Result<Traffic, SynthError> {
     let mut last_problem = String::new();
+    if let Some(traffic) = try_variants(spec, road, rng, &mut last_problem) {
+        return Ok(traffic);
+    }
+    // A short city recording can end before the lead reaches the road's first intersection
+    // after the warm-up, whatever the variant. Then the intersections move nearer, so that
+    // the lead reaches one early in the recording, and the variants run again. Scenarios
+    // that succeed without this keep their road.
+    if spec.kind == ScenarioKind::Turning && spec.domain == Domain::City {
+        let mut nearer = road.clone();
+        if let Some(x) = nearer.intersections.iter().find(|x| x.s > TURN_SEARCH_FROM) {
+            nearer.shift_intersections(TURN_AT - x.s);
+            if let Some(traffic) = try_variants(spec, &mut nearer, rng, &mut last_problem) {
+                *road = nearer;
+                return Ok(traffic);
+            }
+        }
+    }
+    Err(SynthError::Unsatisfiable {
+        scenario: spec.name.clone(),
+        problem: last_problem,
+    })
+}
+
+/// Arc length beyond which the lead's turning intersection is sought when the
+/// intersections are moved: past the latest point from which a lead looks for one
+/// ([`populate`]: its start plus six seconds, 107 m at most).
+const TURN_SEARCH_FROM: f32 = 110.0;
+
+/// Where that intersection is moved to: well within reach of the slowest lead in the twelve
+/// seconds of the shortest turning scenario.
+const TURN_AT: f32 = 125.0;
+
+/// Runs the seeded variants of `spec` on `road` and returns the first that passes
+/// [`check`], keeping the road it ran on; records the last problem otherwise.
+fn try_variants(
+    spec: &ScenarioSpec,
+    road: &mut Road,
+    rng: &Rng,
+    last_problem: &mut String,
+) -> Option<Traffic> {
     for attempt in 0..16u64 {
         let mut attempt_rng = rng.fork(0x7aff_1c00 + attempt);
         let mut attempt_road = road.clone();
@@ -374,15 +414,12 @@ pub fn simulate(spec: &ScenarioSpec, road: &mut Road, rng: &Rng) -> Result<Traff
         match check(spec, &attempt_road, &traffic) {
             Ok(()) => {
                 *road = attempt_road;
-                return Ok(traffic);
+                return Some(traffic);
             }
-            Err(problem) => last_problem = problem,
+            Err(problem) => *last_problem = problem,
         }
     }
-    Err(SynthError::Unsatisfiable {
-        scenario: spec.name.clone(),
-        problem: last_problem,
-    })
+    None
 }
 
 fn pick_body(rng: &mut Rng, domain: Domain) -> BodyType {
@@ -1382,9 +1419,12 @@ fn check(spec: &ScenarioSpec, road: &Road, traffic: &Traffic) -> Result<(), Stri
             Ok(())
         }
         ScenarioKind::Turning => {
+            // Off the lane before the recording's last tenth, so that the turn is seen.
+            let seen = traffic.states.len() * 9 / 10;
             let left = traffic
                 .states
                 .iter()
+                .take(seen)
                 .skip(10)
                 .any(|st| (st[LEAD].d - ego_d).abs() > 0.75 * lane_w);
             let in_lane_first = traffic
