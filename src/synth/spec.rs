@@ -34,6 +34,25 @@ impl ScenarioKind {
         }
     }
 
+    /// The name the command line and `scenario.json` use (`--kind cut-in`).
+    pub fn name(self) -> &'static str {
+        match self {
+            ScenarioKind::CutIn => "cut-in",
+            kind => kind.slug(),
+        }
+    }
+
+    /// The fewest frames a scenario of this kind needs: a sudden brake needs the approach
+    /// before it and the stop after it, a turn or a cut-in the manoeuvre and the lane it
+    /// clears.
+    pub fn min_frames(self) -> u32 {
+        match self {
+            ScenarioKind::Normal => 1,
+            ScenarioKind::Braking => 80,
+            ScenarioKind::Turning | ScenarioKind::CutIn => 120,
+        }
+    }
+
     /// Short lowercase name used in folder names.
     pub fn slug(self) -> &'static str {
         match self {
@@ -122,15 +141,11 @@ impl ScenarioSpec {
         if matches!(self.weather, Weather::Unknown) {
             return bad("weather must be sun, rain, fog or night".into());
         }
-        let min_frames = match self.kind {
-            ScenarioKind::Normal => 1,
-            ScenarioKind::Braking => 80,
-            ScenarioKind::Turning | ScenarioKind::CutIn => 120,
-        };
+        let min_frames = self.kind.min_frames();
         if self.frames < min_frames {
             return bad(format!(
                 "a {} scenario needs at least {min_frames} frames, got {}",
-                self.kind.slug(),
+                self.kind.name(),
                 self.frames
             ));
         }
@@ -187,6 +202,29 @@ pub enum KindChoice {
     Only(ScenarioKind),
     /// A seeded mix of all kinds.
     Mixed,
+}
+
+impl KindChoice {
+    /// How a `Mixed` choice draws: the first kind whose cumulative probability exceeds a
+    /// uniform draw (normal 40 %, braking 30 %, turning 15 %, cut-in 15 %).
+    pub const MIXED_DRAW: [(f32, ScenarioKind); 4] = [
+        (0.4, ScenarioKind::Normal),
+        (0.7, ScenarioKind::Braking),
+        (0.85, ScenarioKind::Turning),
+        (1.0, ScenarioKind::CutIn),
+    ];
+
+    /// The fewest frames every scenario this choice can give needs.
+    pub fn min_frames(self) -> u32 {
+        match self {
+            KindChoice::Only(kind) => kind.min_frames(),
+            KindChoice::Mixed => Self::MIXED_DRAW
+                .iter()
+                .map(|(_, kind)| kind.min_frames())
+                .max()
+                .unwrap_or(1),
+        }
+    }
 }
 
 /// A domain choice; `Any` is a seeded draw per scenario.
@@ -288,6 +326,19 @@ pub fn plan_dataset(request: &DatasetRequest) -> Result<Vec<ScenarioSpec>, Synth
         });
     }
     let frames = request.frames.unwrap_or(DEFAULT_FRAMES);
+    if request.kind == Some(KindChoice::Mixed) {
+        // Refused up front: otherwise whether the request works would depend on whether the
+        // seed happens to draw a kind that needs more frames.
+        let min_frames = KindChoice::Mixed.min_frames();
+        if frames < min_frames {
+            return Err(SynthError::InvalidSpec {
+                problem: format!(
+                    "a mixed data set draws turning and cut-in scenarios, which need at least \
+                     {min_frames} frames, got {frames}; ask for more frames or one kind"
+                ),
+            });
+        }
+    }
     let (width, height) = request.size.unwrap_or((DEFAULT_WIDTH, DEFAULT_HEIGHT));
     let mut rng = Rng::new(request.seed ^ 0x0da7_a5e7);
     let mut specs = Vec::with_capacity(count);
@@ -334,15 +385,10 @@ pub fn plan_dataset(request: &DatasetRequest) -> Result<Vec<ScenarioSpec>, Synth
             Some(KindChoice::Only(k)) => k,
             Some(KindChoice::Mixed) => {
                 let u = rng.unit();
-                if u < 0.4 {
-                    ScenarioKind::Normal
-                } else if u < 0.7 {
-                    ScenarioKind::Braking
-                } else if u < 0.85 {
-                    ScenarioKind::Turning
-                } else {
-                    ScenarioKind::CutIn
-                }
+                KindChoice::MIXED_DRAW
+                    .iter()
+                    .find(|(below, _)| u < *below)
+                    .map_or(ScenarioKind::CutIn, |&(_, kind)| kind)
             }
             None => preset_kind,
         };
@@ -455,6 +501,32 @@ mod tests {
             ..DatasetRequest::new(1, 1)
         };
         assert!(plan_dataset(&req).is_err());
+    }
+
+    #[test]
+    fn too_short_requests_name_the_kind_and_its_minimum() {
+        let request = |kind, frames, seed| DatasetRequest {
+            kind: Some(kind),
+            frames: Some(frames),
+            ..DatasetRequest::new(6, seed)
+        };
+        let cut_in = plan_dataset(&request(KindChoice::Only(ScenarioKind::CutIn), 100, 1));
+        let message = cut_in.unwrap_err().to_string();
+        assert!(
+            message.contains("a cut-in scenario needs at least 120 frames, got 100"),
+            "{message}"
+        );
+        // A mixed request is refused whatever its seed draws, and works from the minimum on.
+        for seed in 0..8 {
+            let short = plan_dataset(&request(KindChoice::Mixed, 80, seed));
+            let message = short.unwrap_err().to_string();
+            assert!(
+                message.contains("mixed") && message.contains("at least 120 frames, got 80"),
+                "{message}"
+            );
+            let plan = plan_dataset(&request(KindChoice::Mixed, 120, seed)).unwrap();
+            assert!(plan.iter().all(|s| s.validate().is_ok()));
+        }
     }
 }
 
