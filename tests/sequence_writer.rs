@@ -201,3 +201,94 @@ fn mismatched_sizes_and_duplicate_frames_are_rejected() {
         "{message}"
     );
 }
+
+/// The names in `dir`, sorted (hidden ones included).
+fn names_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .expect("dir")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn a_scenario_appears_only_when_it_is_finished() {
+    let root = tempfile::tempdir().expect("temp dir");
+    let dir = root.path().join("Scenario_atomic");
+    let writer = ScenarioWriter::create(&dir, &meta()).expect("creates");
+    writer.write_frame(&full_frame(0)).expect("writes");
+    // While frames are written, readers of the data set see no scenario at all.
+    assert!(!dir.exists());
+    assert_eq!(names_in(root.path()), vec![".Scenario_atomic.partial"]);
+    assert!(vadscope::sequence::discover_scenarios(root.path()).is_err());
+    writer.write_frame(&full_frame(1)).expect("writes");
+    assert_eq!(writer.finish().expect("finishes"), dir);
+    assert_eq!(names_in(root.path()), vec!["Scenario_atomic"]);
+    assert!(file(&dir, "RGB_IMG", 1, "png").is_file());
+    assert!(dir.join("scenario.json").is_file());
+}
+
+#[test]
+fn an_unfinished_scenario_leaves_nothing_behind() {
+    let root = tempfile::tempdir().expect("temp dir");
+    let dir = root.path().join("Scenario_dropped");
+    {
+        let writer = ScenarioWriter::create(&dir, &meta()).expect("creates");
+        writer.write_frame(&full_frame(0)).expect("writes");
+        let mut bad = full_frame(1);
+        bad.depth_m = Some(vec![1.0; 3]);
+        writer
+            .write_frame(&bad)
+            .expect_err("the depth buffer is short");
+        // The caller gives up on the scenario here.
+    }
+    assert!(names_in(root.path()).is_empty());
+
+    // A staging folder left by a killed process is replaced, not mixed in.
+    let stale = root.path().join(".Scenario_dropped.partial/RGB_IMG");
+    std::fs::create_dir_all(&stale).expect("mkdir");
+    std::fs::write(stale.join("RGB_IMG_77.png"), b"half a frame").expect("write");
+    let writer = ScenarioWriter::create(&dir, &meta()).expect("creates over the stale folder");
+    writer.write_frame(&full_frame(0)).expect("writes");
+    writer.finish().expect("finishes");
+    assert_eq!(names_in(&dir.join("RGB_IMG")), vec!["RGB_IMG_0.png"]);
+    assert_eq!(names_in(root.path()), vec!["Scenario_dropped"]);
+}
+
+#[test]
+fn a_writer_never_writes_into_an_existing_scenario() {
+    let root = tempfile::tempdir().expect("temp dir");
+    let dir = root.path().join("Scenario_taken");
+    std::fs::create_dir_all(dir.join("RGB_IMG")).expect("mkdir");
+    std::fs::write(dir.join("RGB_IMG/RGB_IMG_0.png"), b"the user's frame").expect("write");
+    let message = ScenarioWriter::create(&dir, &meta())
+        .expect_err("not empty")
+        .to_string();
+    assert!(
+        message.contains("Scenario_taken") && message.contains("not empty"),
+        "{message}"
+    );
+    assert_eq!(
+        std::fs::read(dir.join("RGB_IMG/RGB_IMG_0.png")).expect("kept"),
+        b"the user's frame"
+    );
+
+    let file_in_the_way = root.path().join("Scenario_file");
+    std::fs::write(&file_in_the_way, b"notes").expect("write");
+    let message = ScenarioWriter::create(&file_in_the_way, &meta())
+        .expect_err("a file")
+        .to_string();
+    assert!(
+        message.contains("Scenario_file") && message.contains("file"),
+        "{message}"
+    );
+
+    // An empty folder, as `tempdir` makes, is a fine destination.
+    let empty = root.path().join("Scenario_empty");
+    std::fs::create_dir(&empty).expect("mkdir");
+    let writer = ScenarioWriter::create(&empty, &meta()).expect("creates");
+    writer.write_frame(&full_frame(0)).expect("writes");
+    assert_eq!(writer.finish().expect("finishes"), empty);
+    assert!(file(&empty, "RGB_IMG", 0, "png").is_file());
+}

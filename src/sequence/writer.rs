@@ -5,6 +5,11 @@
 //! Frames are independent files, so `write_frame` takes `&self` and may run on several
 //! threads at once; within one frame the modalities are encoded in parallel as well. Boxes
 //! and flags are collected behind a mutex and written by `finish`.
+//!
+//! A scenario appears whole or not at all: its files go to a hidden staging folder beside
+//! the scenario folder (`.<name>.partial`, which discovery skips), and `finish` renames it
+//! into place. A writer dropped before `finish` removes its staging folder; one left by a
+//! killed process is removed by the next writer of the same scenario.
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -27,8 +32,11 @@ use super::{BoxRecord, FrameId, FrameRecord, Modality, ScenarioMeta, SequenceErr
 #[derive(Debug)]
 pub struct ScenarioWriter {
     dir: PathBuf,
+    staging: PathBuf,
     meta: ScenarioMeta,
     collected: Mutex<Collected>,
+    /// Set by `finish` once the staging folder has become the scenario folder.
+    finished: bool,
 }
 
 /// What `finish` needs from the frames written so far.
@@ -40,17 +48,39 @@ struct Collected {
 }
 
 impl ScenarioWriter {
-    /// Creates `dir` (and its modality folders lazily) for a new scenario.
+    /// Starts a new scenario that `finish` will put at `dir`, which must not exist yet or
+    /// be an empty folder; the files are written to [`staging_folder`]`(dir)` until then.
     pub fn create(dir: &Path, meta: &ScenarioMeta) -> Result<Self, SequenceError> {
-        std::fs::create_dir_all(dir).map_err(|e| SequenceError::io(dir, e))?;
+        if dir.exists() && !dir.is_dir() {
+            return Err(SequenceError::format(
+                dir,
+                "a file stands where the scenario folder should go",
+            ));
+        }
+        if std::fs::read_dir(dir).is_ok_and(|mut entries| entries.next().is_some()) {
+            return Err(SequenceError::format(
+                dir,
+                "the scenario folder already exists and is not empty",
+            ));
+        }
+        let staging = staging_folder(dir).ok_or_else(|| {
+            SequenceError::format(dir, "a scenario folder needs a name and a parent folder")
+        })?;
+        if staging.exists() {
+            // Left by a writer that was killed before it could finish or clean up.
+            std::fs::remove_dir_all(&staging).map_err(|e| SequenceError::io(&staging, e))?;
+        }
+        std::fs::create_dir_all(&staging).map_err(|e| SequenceError::io(&staging, e))?;
         Ok(Self {
             dir: dir.to_path_buf(),
+            staging,
             meta: meta.clone(),
             collected: Mutex::new(Collected::default()),
+            finished: false,
         })
     }
 
-    /// The scenario folder being written.
+    /// The scenario folder that `finish` creates.
     pub fn dir(&self) -> &Path {
         &self.dir
     }
@@ -64,7 +94,7 @@ impl ScenarioWriter {
     /// recorded under `frame.id` whatever their own `frame` field says.
     pub fn write_frame(&self, frame: &FrameRecord) -> Result<(), SequenceError> {
         self.claim_frame(frame.id)?;
-        let files = encode_frame(&self.dir, frame)?;
+        let files = encode_frame(&self.staging, frame)?;
         files.par_iter().try_for_each(|(path, bytes)| {
             if let Some(folder) = path.parent() {
                 std::fs::create_dir_all(folder).map_err(|e| SequenceError::io(folder, e))?;
@@ -86,24 +116,32 @@ impl ScenarioWriter {
 
     /// Writes BBOX_2D/boxes.csv (sorted by frame, track; only when some frame carried
     /// boxes), frame_labels.csv (`frame,anomaly`; only when some frame carried a flag),
-    /// scenario.json; returns the scenario folder.
-    pub fn finish(self) -> Result<PathBuf, SequenceError> {
-        let collected = self
-            .collected
-            .into_inner()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
+    /// scenario.json, then moves the scenario into place; returns the scenario folder.
+    pub fn finish(mut self) -> Result<PathBuf, SequenceError> {
+        let collected = std::mem::take(
+            self.collected
+                .get_mut()
+                .unwrap_or_else(std::sync::PoisonError::into_inner),
+        );
         if !collected.boxes.is_empty() {
-            let path = self.dir.join(BOXES_FILE);
+            let path = self.staging.join(BOXES_FILE);
             if let Some(folder) = path.parent() {
                 std::fs::create_dir_all(folder).map_err(|e| SequenceError::io(folder, e))?;
             }
             write_boxes(&path, &collected.boxes)?;
         }
         if !collected.labels.is_empty() {
-            write_frame_labels(&self.dir.join(FRAME_LABELS_FILE), &collected.labels)?;
+            write_frame_labels(&self.staging.join(FRAME_LABELS_FILE), &collected.labels)?;
         }
-        write_scenario_json(&self.dir.join(SCENARIO_JSON_FILE), &self.meta)?;
-        Ok(self.dir)
+        write_scenario_json(&self.staging.join(SCENARIO_JSON_FILE), &self.meta)?;
+        // An empty folder at the destination (allowed by `create`) would make the rename
+        // fail on some systems; a non-empty one, made while this writer ran, is kept.
+        if self.dir.is_dir() {
+            std::fs::remove_dir(&self.dir).map_err(|e| SequenceError::io(&self.dir, e))?;
+        }
+        std::fs::rename(&self.staging, &self.dir).map_err(|e| SequenceError::io(&self.dir, e))?;
+        self.finished = true;
+        Ok(self.dir.clone())
     }
 
     fn lock(&self) -> std::sync::MutexGuard<'_, Collected> {
@@ -124,6 +162,27 @@ impl ScenarioWriter {
             ))
         }
     }
+}
+
+impl Drop for ScenarioWriter {
+    /// A scenario that was not finished is incomplete: its staging folder goes.
+    fn drop(&mut self) {
+        if !self.finished {
+            // Nothing to report to: the error that stopped the writer is what matters, and
+            // a folder left behind is removed by the next writer of the scenario.
+            let _ = std::fs::remove_dir_all(&self.staging);
+        }
+    }
+}
+
+/// The hidden folder beside `dir` where [`ScenarioWriter`] writes `dir`'s files until it
+/// finishes (`<parent>/.<name>.partial`); `None` when `dir` has no name.
+pub fn staging_folder(dir: &Path) -> Option<PathBuf> {
+    let name = dir.file_name()?;
+    let mut staged = std::ffi::OsString::from(".");
+    staged.push(name);
+    staged.push(".partial");
+    Some(dir.with_file_name(staged))
 }
 
 /// One encoding task of a frame.
