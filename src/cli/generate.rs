@@ -10,8 +10,8 @@ use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use vadscope::sequence::Modality;
 use vadscope::synth::{
-    DatasetRequest, DomainChoice, KindChoice, Preset, WeatherChoice, generate_scenario_without,
-    parse_size, plan_dataset,
+    DatasetRequest, DomainChoice, KindChoice, Preset, WeatherChoice, check_generated,
+    generate_scenario_without, parse_size, plan_dataset,
 };
 
 /// Options of `vadscope generate`.
@@ -50,8 +50,12 @@ pub struct GenerateArgs {
     #[arg(long, value_enum, value_delimiter = ',')]
     omit: Vec<OmitArg>,
     /// Replace scenario folders that already exist instead of stopping.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "resume")]
     force: bool,
+    /// Keep scenario folders that already exist and hold what this run would write (as an
+    /// interrupted run leaves them), and generate the rest.
+    #[arg(long)]
+    resume: bool,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -94,17 +98,27 @@ fn request_of(args: &GenerateArgs) -> DatasetRequest {
 pub fn run(args: GenerateArgs) -> anyhow::Result<ExitCode> {
     vadscope::synth::keep_freed_frame_buffers();
     let specs = plan_dataset(&request_of(&args))?;
-    for spec in &specs {
+    let omit: Vec<Modality> = args.omit.iter().map(|o| o.modality()).collect();
+    // Every existing folder is dealt with before anything is rendered, so that a mismatch
+    // stops the run at once rather than after the scenarios before it.
+    let mut complete = vec![false; specs.len()];
+    for (spec, complete) in specs.iter().zip(&mut complete) {
         let dir = args.out.join(format!("Scenario_{}", spec.name));
-        if dir.exists() {
-            if !args.force {
-                bail!(
-                    "{} already exists; pass --force to replace it",
-                    dir.display()
-                );
-            }
+        if !dir.exists() {
+            continue;
+        }
+        if args.resume {
+            check_generated(spec, &args.out, &omit)?;
+            *complete = true;
+        } else if args.force {
             std::fs::remove_dir_all(&dir)
                 .with_context(|| format!("cannot remove {}", dir.display()))?;
+        } else {
+            bail!(
+                "{} already exists; pass --resume to keep the scenarios that are complete or \
+                 --force to replace them",
+                dir.display()
+            );
         }
     }
     std::fs::create_dir_all(&args.out)
@@ -119,16 +133,25 @@ pub fn run(args: GenerateArgs) -> anyhow::Result<ExitCode> {
         .progress_chars("=> "),
     );
     bar.set_prefix("generating");
-    let omit: Vec<Modality> = args.omit.iter().map(|o| o.modality()).collect();
+    // Above the bar on a terminal, and in the output as well when it is piped to a log
+    // (where the bar does not draw).
+    let say = |line: &str| bar.suspend(|| println!("{line}"));
     let done = AtomicU64::new(0);
     for (i, spec) in specs.iter().enumerate() {
+        if complete[i] {
+            done.fetch_add(u64::from(spec.frames), Ordering::Relaxed);
+            bar.set_position(done.load(Ordering::Relaxed));
+            let kept = args.out.join(format!("Scenario_{}", spec.name));
+            say(&format!("kept {} (complete)", kept.display()));
+            continue;
+        }
         bar.set_message(format!("scenario {}/{}: {}", i + 1, specs.len(), spec.name));
         let dir = generate_scenario_without(spec, &args.out, &omit, |_| {
             done.fetch_add(1, Ordering::Relaxed);
             bar.set_position(done.load(Ordering::Relaxed));
         })
         .with_context(|| format!("generating scenario {}", spec.name))?;
-        bar.println(format!("wrote {}", dir.display()));
+        say(&format!("wrote {}", dir.display()));
     }
     bar.finish_with_message("done");
     Ok(ExitCode::SUCCESS)

@@ -23,6 +23,14 @@ pub enum SynthError {
         /// The problem of the last attempt.
         problem: String,
     },
+    /// A scenario folder that exists does not hold what the spec would write.
+    #[error("{path} already exists but does not hold this scenario: {problem}")]
+    NotTheSame {
+        /// Scenario folder.
+        path: PathBuf,
+        /// The first difference found.
+        problem: String,
+    },
     /// Writing the scenario failed.
     #[error("writing scenario {path}: {source}")]
     Write {

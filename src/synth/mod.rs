@@ -65,7 +65,9 @@ mod vehicle;
 
 pub use error::SynthError;
 pub use heap_policy::keep_freed_frame_buffers;
-pub use scenario::{GENERATOR_NAME, Scenario, generate_scenario, generate_scenario_without};
+pub use scenario::{
+    GENERATOR_NAME, Scenario, check_generated, generate_scenario, generate_scenario_without,
+};
 pub use spec::{
     DEFAULT_FRAMES, DEFAULT_HEIGHT, DEFAULT_WIDTH, DatasetPlan, DatasetRequest, DomainChoice,
     KindChoice, ParseChoiceError, Preset, ScenarioKind, ScenarioSpec, WeatherChoice, domain_slug,

@@ -19,6 +19,9 @@ use super::road::Road;
 use super::scenery::Scenery;
 use super::spec::{ScenarioKind, ScenarioSpec};
 use super::traffic::{AnomalyWindow, FRAME_DT, Traffic, simulate};
+use crate::sequence::discovery::scan_scenario;
+use crate::sequence::layout::SCENARIO_JSON_FILE;
+use crate::sequence::meta::read_scenario_json;
 use crate::sequence::writer::ScenarioWriter;
 use crate::sequence::{
     CameraIntrinsics, Domain, FrameId, FrameRecord, FrameWindow, Modality, ScenarioMeta,
@@ -266,6 +269,62 @@ pub fn generate_scenario(
     on_frame: impl Fn(usize) + Sync,
 ) -> Result<PathBuf, SynthError> {
     generate_scenario_without(spec, out_dir, &[], on_frame)
+}
+
+/// Checks that `out_dir/Scenario_<name>/` holds what [`generate_scenario_without`] writes
+/// for `spec` and `omit`: the same `scenario.json`, frames `0..frames` and the same
+/// modality folders. This is what lets `vadscope generate --resume` keep the scenarios an
+/// interrupted run finished (the writer only ever leaves whole scenarios) instead of
+/// rendering them again. The files' content is not compared: the same spec writes the same
+/// bytes.
+pub fn check_generated(
+    spec: &ScenarioSpec,
+    out_dir: &Path,
+    omit: &[Modality],
+) -> Result<PathBuf, SynthError> {
+    let dir = out_dir.join(format!("Scenario_{}", spec.name));
+    let not_the_same = |problem: String| SynthError::NotTheSame {
+        path: dir.clone(),
+        problem,
+    };
+    let scenario = Scenario::build(spec)?;
+    let found = read_scenario_json(&dir.join(SCENARIO_JSON_FILE))
+        .map_err(|e| not_the_same(e.to_string()))?;
+    if found != scenario.meta() {
+        return Err(not_the_same(
+            "its scenario.json differs (another seed, image size or generator version)".into(),
+        ));
+    }
+    let files = scan_scenario(&dir).map_err(|e| not_the_same(e.to_string()))?;
+    let frames = spec.frames as u64;
+    let rgb_ids: Vec<u64> = files
+        .of(Modality::Rgb)
+        .map(|by_id| by_id.keys().map(|id| id.0).collect())
+        .unwrap_or_default();
+    if !rgb_ids.iter().copied().eq(0..frames) {
+        return Err(not_the_same(format!(
+            "it holds {} RGB frames, this scenario has frames 0-{}",
+            rgb_ids.len(),
+            frames - 1
+        )));
+    }
+    for modality in Modality::ALL {
+        let written = !omit.contains(&modality)
+            && (modality != Modality::Anomaly || scenario.world.labels_lead_as_agent);
+        let present = files.of(modality).is_some_and(|by_id| !by_id.is_empty());
+        if written != present {
+            return Err(not_the_same(format!(
+                "{} is {}",
+                modality.folder(),
+                if present {
+                    "there but left out of this run"
+                } else {
+                    "missing"
+                }
+            )));
+        }
+    }
+    Ok(dir)
 }
 
 /// As [`generate_scenario`], but leaves the `omit`ted modalities out of the written files
