@@ -5,8 +5,9 @@
 
 use vadscope::sequence::{Domain, Weather};
 use vadscope::synth::{
-    EGO, LEAD, NORMAL_DECEL_LIMIT, Role, Scenario, ScenarioKind, ScenarioSpec, first_collision,
-    max_decel,
+    CROSS_STREET_END, DatasetRequest, DomainChoice, EGO, KindChoice, LEAD, NORMAL_DECEL_LIMIT,
+    Role, Scenario, ScenarioKind, ScenarioSpec, WeatherChoice, first_collision, max_decel,
+    plan_dataset,
 };
 
 fn build(kind: ScenarioKind, domain: Domain, seed: u64) -> Scenario {
@@ -197,5 +198,69 @@ fn the_maneuvering_vehicle_is_visible_while_it_maneuvers() {
             rec.boxes.iter().any(|b| b.track_id == id),
             "{kind:?}: no box for the vehicle at frame {mid}"
         );
+    }
+}
+
+/// Long recordings, with the seeds that used to fail. Cross-street traffic drove on for
+/// kilometres until it met other cross streets or the curving main road again (city,
+/// 2,000 frames), and a cut-in triggered 30 % into the recording found the cut-in vehicle
+/// already past the lead (highway, 800 frames).
+#[test]
+fn long_scenarios_build_for_seeds_that_used_to_fail() {
+    let cases = [
+        (ScenarioKind::Normal, Domain::City, 2000, 12),
+        (ScenarioKind::Normal, Domain::City, 2000, 23),
+        (ScenarioKind::CutIn, Domain::Highway, 800, 1),
+        (ScenarioKind::CutIn, Domain::Highway, 800, 2),
+    ];
+    for (kind, domain, frames, seed) in cases {
+        // As `vadscope generate --kind K --domain D --frames F --seed S` plans it.
+        let request = DatasetRequest {
+            kind: Some(KindChoice::Only(kind)),
+            domain: Some(if domain == Domain::City {
+                DomainChoice::City
+            } else {
+                DomainChoice::Highway
+            }),
+            weather: Some(WeatherChoice::Sun),
+            frames: Some(frames),
+            size: Some((64, 48)),
+            ..DatasetRequest::new(1, seed)
+        };
+        let spec = plan_dataset(&request).expect("plan").remove(0);
+        let sc = Scenario::build(&spec).unwrap_or_else(|e| panic!("{kind:?} seed {seed}: {e}"));
+        let t = sc.traffic();
+        assert_eq!(t.states.len(), frames as usize);
+        assert!(first_collision(t).is_none(), "{kind:?} seed {seed}");
+        // Only vehicles on a cross street depart, and only past its end.
+        let mut departures = 0;
+        for st in &t.states {
+            for (v, s) in t.vehicles.iter().zip(st) {
+                let on_cross_street = matches!(v.role, Role::Cross | Role::Lead);
+                if s.departed {
+                    departures += 1;
+                    assert!(
+                        on_cross_street && s.d.abs() > CROSS_STREET_END,
+                        "{v:?} {s:?}"
+                    );
+                } else if v.role == Role::Cross {
+                    assert!(s.d.abs() <= CROSS_STREET_END + 1e-3, "{v:?} {s:?}");
+                }
+            }
+        }
+        assert_eq!(
+            departures > 0,
+            domain == Domain::City,
+            "{kind:?} seed {seed}"
+        );
+        if kind == ScenarioKind::CutIn {
+            let c = t.cut_in.expect("cut-in vehicle");
+            let inside = t
+                .states
+                .iter()
+                .position(|st| (st[c].d - t.ego_lane_d).abs() < 0.3)
+                .expect("enters the ego lane");
+            assert!(t.states[inside][c].s > t.states[inside][EGO].s);
+        }
     }
 }

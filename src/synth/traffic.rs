@@ -32,6 +32,15 @@ const TURN_SPEED: f32 = 4.5;
 const TURN_RADIUS: f32 = 6.0;
 /// Distance from an intersection's centre line to the stop line (beyond the half width).
 const STOP_LINE_EXTRA: f32 = 1.0 + CROSSWALK + 0.6;
+/// Distance from the main road's centre line (m) at which a cross street ends for the
+/// vehicles on it, turning leads included. Cross streets are straight lines normal to the
+/// road, so on a curving road they meet each other and the main road again from the
+/// smallest bend radius (350 m) on; vehicles of a long scenario would get there. Within
+/// 200 frames no vehicle gets this far.
+pub const CROSS_STREET_END: f32 = 300.0;
+/// The latest recorded frame from which a cut-in may start (30 % into a 200-frame
+/// scenario, as in shorter ones).
+const CUT_IN_LATEST_TRIGGER: i64 = 60;
 
 /// Why a vehicle is in the scenario.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -199,6 +208,9 @@ pub struct VehicleState {
     pub brake_lights: bool,
     /// Whether the vehicle is emergency braking (brake onset to standstill).
     pub emergency: bool,
+    /// Whether the vehicle has driven off the end of its cross street
+    /// ([`CROSS_STREET_END`]): it is no longer drawn or checked for collisions.
+    pub departed: bool,
 }
 
 /// The inclusive frame window of the anomaly (brake onset to standstill).
@@ -620,7 +632,9 @@ fn populate(spec: &ScenarioSpec, road: &mut Road, rng: &mut Rng) -> (Vec<Vehicle
             let s = -rng.range(8.0, 20.0);
             let idm = idm_for(rng, domain, v0, body);
             script.cut_in = Some(fleet.add(Role::CutIn, model, lane(from_d), s, idm));
-            script.trigger_from = (frames as f32 * 0.3) as i64;
+            // Not later than 6 s in: the cut-in vehicle is faster than the lead as well, and
+            // in a long scenario it would have passed the lead before a later trigger.
+            script.trigger_from = ((frames as f32 * 0.3) as i64).min(CUT_IN_LATEST_TRIGGER);
             keep_clear.push((from_d, s - 40.0, s + 160.0));
             if !highway {
                 for x in &mut road.intersections {
@@ -1281,6 +1295,7 @@ fn record(
                 steer: ((2.8 * kappa).atan() / 1.22).clamp(-1.0, 1.0),
                 brake_lights: !parked && (dy.brake_lights || emergency || dy.v < 0.05),
                 emergency,
+                departed: p.cross_lane.is_some() && p.d.abs() > CROSS_STREET_END,
             }
         })
         .collect()
@@ -1348,6 +1363,9 @@ pub fn first_collision(traffic: &Traffic) -> Option<(u32, usize, usize)> {
                 }
                 let (va, vb) = (&traffic.vehicles[a], &traffic.vehicles[b]);
                 if va.role == Role::Parked && vb.role == Role::Parked {
+                    continue;
+                }
+                if st[a].departed || st[b].departed {
                     continue;
                 }
                 if footprints_overlap(&st[a], &va.model, &st[b], &vb.model, 0.05) {
