@@ -36,7 +36,7 @@ pub struct GenerateArgs {
     /// Weather; `any` draws one per scenario from the seed.
     #[arg(long, value_name = "sun|rain|fog|night|any")]
     weather: Option<WeatherChoice>,
-    /// Frames per scenario at 10 fps (default 200, as AnoVox).
+    /// Frames per scenario at 10 fps (default 200, as AnoVox; at most 2000).
     #[arg(long)]
     frames: Option<u32>,
     /// Image size as WIDTHxHEIGHT (default 768x512, AnoVox's camera).

@@ -70,8 +70,8 @@ pub use scenario::{
 };
 pub use spec::{
     DEFAULT_FRAMES, DEFAULT_HEIGHT, DEFAULT_WIDTH, DatasetPlan, DatasetRequest, DomainChoice,
-    KindChoice, ParseChoiceError, Preset, ScenarioKind, ScenarioSpec, WeatherChoice, domain_slug,
-    parse_size, plan_dataset, weather_slug,
+    KindChoice, MAX_FRAMES, ParseChoiceError, Preset, ScenarioKind, ScenarioSpec, WeatherChoice,
+    domain_slug, parse_size, plan_dataset, weather_slug,
 };
 pub use traffic::{
     AnomalyWindow, CROSS_STREET_END, EGO, FRAME_DT, LEAD, NORMAL_DECEL_LIMIT, Role, Traffic,

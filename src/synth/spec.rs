@@ -66,6 +66,10 @@ impl ScenarioKind {
 
 /// Default number of frames of a scenario (AnoVox records 200 frames at 10 Hz).
 pub const DEFAULT_FRAMES: u32 = 200;
+/// The most frames of one scenario: 200 s, ten times AnoVox's recordings. Longer ones
+/// need a longer road, and the randomly bending road of a 4,000-frame scenario can meet
+/// itself (its traffic then collides, and no variant satisfies the scenario).
+pub const MAX_FRAMES: u32 = 2000;
 /// Default image width (AnoVox's camera).
 pub const DEFAULT_WIDTH: u32 = 768;
 /// Default image height (AnoVox's camera).
@@ -132,8 +136,12 @@ impl ScenarioSpec {
                 self.width, self.height
             ));
         }
-        if self.frames == 0 || self.frames > 100_000 {
-            return bad(format!("frame count {} is outside 1..100000", self.frames));
+        if self.frames == 0 || self.frames > MAX_FRAMES {
+            return bad(format!(
+                "frame count {} is outside 1..{MAX_FRAMES} (the longest scenario the \
+                 generator supports, 200 s; generate several for more)",
+                self.frames
+            ));
         }
         if matches!(self.domain, Domain::Unknown) {
             return bad("domain must be city or highway".into());
@@ -501,6 +509,16 @@ mod tests {
             ..DatasetRequest::new(1, 1)
         };
         assert!(plan_dataset(&req).is_err());
+        let longest = |frames| DatasetRequest {
+            kind: Some(KindChoice::Mixed),
+            frames: Some(frames),
+            ..DatasetRequest::new(3, 1)
+        };
+        assert!(plan_dataset(&longest(MAX_FRAMES)).is_ok());
+        let message = plan_dataset(&longest(MAX_FRAMES + 1))
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains("2001 is outside 1..2000"), "{message}");
     }
 
     #[test]
