@@ -161,12 +161,7 @@ fn rgb_only_frames_write_no_optional_files() {
     frame.anomalous = None;
     writer.write_frame(&frame).expect("writes");
     writer.finish().expect("finishes");
-    let mut entries: Vec<String> = std::fs::read_dir(&dir)
-        .expect("dir")
-        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
-        .collect();
-    entries.sort();
-    assert_eq!(entries, vec!["RGB_IMG", "scenario.json"]);
+    assert_eq!(names_in(&dir), vec!["RGB_IMG", "scenario.json"]);
 }
 
 #[test]

@@ -101,15 +101,14 @@ pub fn run(args: GenerateArgs) -> anyhow::Result<ExitCode> {
     let omit: Vec<Modality> = args.omit.iter().map(|o| o.modality()).collect();
     // Every existing folder is dealt with before anything is rendered, so that a mismatch
     // stops the run at once rather than after the scenarios before it.
-    let mut complete = vec![false; specs.len()];
-    for (spec, complete) in specs.iter().zip(&mut complete) {
-        let dir = args.out.join(format!("Scenario_{}", spec.name));
+    let mut kept: Vec<Option<PathBuf>> = vec![None; specs.len()];
+    for (spec, kept) in specs.iter().zip(&mut kept) {
+        let dir = spec.folder_in(&args.out);
         if !dir.exists() {
             continue;
         }
         if args.resume {
-            check_generated(spec, &args.out, &omit)?;
-            *complete = true;
+            *kept = Some(check_generated(spec, &args.out, &omit)?);
         } else if args.force {
             std::fs::remove_dir_all(&dir)
                 .with_context(|| format!("cannot remove {}", dir.display()))?;
@@ -138,11 +137,10 @@ pub fn run(args: GenerateArgs) -> anyhow::Result<ExitCode> {
     let say = |line: &str| bar.suspend(|| println!("{line}"));
     let done = AtomicU64::new(0);
     for (i, spec) in specs.iter().enumerate() {
-        if complete[i] {
+        if let Some(dir) = &kept[i] {
             done.fetch_add(u64::from(spec.frames), Ordering::Relaxed);
             bar.set_position(done.load(Ordering::Relaxed));
-            let kept = args.out.join(format!("Scenario_{}", spec.name));
-            say(&format!("kept {} (complete)", kept.display()));
+            say(&format!("kept {} (complete)", dir.display()));
             continue;
         }
         bar.set_message(format!("scenario {}/{}: {}", i + 1, specs.len(), spec.name));

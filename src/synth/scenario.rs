@@ -282,7 +282,7 @@ pub fn check_generated(
     out_dir: &Path,
     omit: &[Modality],
 ) -> Result<PathBuf, SynthError> {
-    let dir = out_dir.join(format!("Scenario_{}", spec.name));
+    let dir = spec.folder_in(out_dir);
     let not_the_same = |problem: String| SynthError::NotTheSame {
         path: dir.clone(),
         problem,
@@ -337,7 +337,7 @@ pub fn generate_scenario_without(
     on_frame: impl Fn(usize) + Sync,
 ) -> Result<PathBuf, SynthError> {
     let scenario = Scenario::build(spec)?;
-    let dir = out_dir.join(format!("Scenario_{}", spec.name));
+    let dir = spec.folder_in(out_dir);
     let write_err = |source| SynthError::Write {
         path: dir.clone(),
         source,

@@ -2,6 +2,8 @@
 //! ([`DatasetRequest`] → [`plan_dataset`]), including the two presets shaped like the
 //! paper's data (`train`: normal driving only; `test`: 13 sudden-braking scenarios).
 
+use std::path::{Path, PathBuf};
+
 use serde::{Deserialize, Serialize};
 
 use super::SynthError;
@@ -125,6 +127,11 @@ impl ScenarioSpec {
             weather_slug(self.weather),
             self.seed
         )
+    }
+
+    /// The folder the scenario is written to under `out_dir`: `Scenario_<name>`.
+    pub fn folder_in(&self, out_dir: &Path) -> PathBuf {
+        out_dir.join(format!("Scenario_{}", self.name))
     }
 
     /// Checks that the spec can be generated.
