@@ -74,7 +74,7 @@ pub use spec::{
     domain_slug, parse_size, plan_dataset, weather_slug,
 };
 pub use traffic::{
-    AnomalyWindow, CROSS_STREET_END, EGO, FRAME_DT, LEAD, NORMAL_DECEL_LIMIT, Role, Traffic,
+    AnomalyWindow, CROSS_STREET_END, EGO, FRAME_DT, LEAD, NORMAL_DECEL_LIMIT, Role, Route, Traffic,
     Vehicle, VehicleState, first_collision, max_decel,
 };
 pub use vehicle::{BodyType, VehicleModel};

@@ -463,7 +463,7 @@ impl<'w> FrameView<'w> {
             }
             let st = &states[i];
             let origin = cam.relative(V3::new(st.x, st.y, 0.0));
-            if st.departed || origin.x.abs() > draw || origin.y.abs() > draw {
+            if st.beyond_street_end || origin.x.abs() > draw || origin.y.abs() > draw {
                 continue;
             }
             let (c, s) = (st.yaw.cos(), st.yaw.sin());

@@ -7,11 +7,13 @@
 //! Normal braking is limited to [`NORMAL_DECEL_LIMIT`]. Scripted events (sudden braking of
 //! the lead, a lane change out of or into the ego lane) are triggered inside the simulation
 //! when their preconditions hold. The simulation runs at 20 Hz and records every vehicle at
-//! the 10 Hz frame times.
+//! the 10 Hz frame times. A long city recording is simulated twice: the first run tells
+//! when the ego comes near each intersection, the second adds cross traffic that arrives
+//! there at that time ([`cross_stream`]).
 
 use super::SynthError;
 use super::rng::Rng;
-use super::road::{CROSSWALK, LightState, Road};
+use super::road::{CROSSWALK, Intersection, LightState, Road};
 use super::spec::{ScenarioKind, ScenarioSpec};
 use super::vehicle::{BodyType, VehicleModel};
 use crate::sequence::Domain;
@@ -38,6 +40,26 @@ const STOP_LINE_EXTRA: f32 = 1.0 + CROSSWALK + 0.6;
 /// smallest bend radius (350 m) on; vehicles of a long scenario would get there. Within
 /// 200 frames no vehicle gets this far.
 pub const CROSS_STREET_END: f32 = 300.0;
+/// How narrow (as a fraction of its width at the main road) a cross street may get on the
+/// inner side of a bend before it ends ([`cross_street_end`]).
+const CROSS_STREET_SQUEEZE: f32 = 0.75;
+/// Recordings longer than this many frames get a stream of cross traffic
+/// ([`cross_stream`]); in shorter ones the vehicles placed on the cross streets at the start
+/// keep them busy to the end.
+const CROSS_STREAM_FROM_FRAMES: u32 = 300;
+/// Desired speeds of cross-street traffic (m/s).
+const CROSS_V0: (f32, f32) = (8.0, 11.0);
+/// The ego watches an intersection's cross traffic from this far before its centre line
+/// until this far past it (m).
+const CROSS_WATCH: (f32, f32) = (150.0, 20.0);
+/// Seconds of streamed cross traffic before and after the ego's watch: the stream's queues
+/// at the red light build up before, and the ego may come a little later than without it.
+const CROSS_WATCH_PAD_S: f32 = 10.0;
+/// Time between two streamed vehicles of one cross-street lane (s): about the 0.1 vehicles
+/// a second that a cross green of 5–8 s in a cycle of about 40 s lets through.
+const CROSS_HEADWAY_S: (f32, f32) = (6.0, 14.0);
+/// Least distance between the starts of two streamed vehicles of one lane (m).
+const CROSS_MIN_SPACING: f32 = 12.0;
 /// The latest recorded frame from which a cut-in may start (30 % into a 200-frame
 /// scenario, as in shorter ones).
 const CUT_IN_LATEST_TRIGGER: i64 = 60;
@@ -208,9 +230,10 @@ pub struct VehicleState {
     pub brake_lights: bool,
     /// Whether the vehicle is emergency braking (brake onset to standstill).
     pub emergency: bool,
-    /// Whether the vehicle has driven off the end of its cross street
-    /// ([`CROSS_STREET_END`]): it is no longer drawn or checked for collisions.
-    pub departed: bool,
+    /// Whether the vehicle is on a cross street beyond its end ([`CROSS_STREET_END`] from
+    /// the main road, less on the inner side of a bend): it has driven off it, or (streamed
+    /// cross traffic) has yet to arrive. It is neither drawn nor checked for collisions.
+    pub beyond_street_end: bool,
 }
 
 /// The inclusive frame window of the anomaly (brake onset to standstill).
@@ -422,7 +445,16 @@ fn try_variants(
         let mut attempt_rng = rng.fork(0x7aff_1c00 + attempt);
         let mut attempt_road = road.clone();
         let (vehicles, script) = populate(spec, &mut attempt_road, &mut attempt_rng);
-        let traffic = run(spec, &attempt_road, vehicles, script);
+        let first = run(spec, &attempt_road, vehicles.clone(), script.clone());
+        let mut stream_rng = attempt_rng.fork(0xc055_57ea);
+        let traffic = match cross_stream(spec, &attempt_road, &first, &vehicles, &mut stream_rng) {
+            Some(more) => {
+                // Long recordings: not both runs' states in memory at once.
+                drop(first);
+                run(spec, &attempt_road, more, script)
+            }
+            None => first,
+        };
         match check(spec, &attempt_road, &traffic) {
             Ok(()) => {
                 *road = attempt_road;
@@ -751,35 +783,19 @@ fn populate_city_extras(fleet: &mut Fleet, road: &Road, rng: &mut Rng, ego_trave
             s += len + rng.range(0.8, 6.0);
         }
     }
-    // The turning lead drives into the -d lane of its intersection: keep that lane free.
-    let turn_lane = match fleet.vehicles.get(LEAD).map(|v| v.route) {
-        Some(Route::Turn { s_turn, radius, .. }) => Some(s_turn + radius),
-        _ => None,
-    };
+    let turn_lane = turn_lane(&fleet.vehicles);
     for (xi, x) in road.intersections.iter().enumerate() {
         if x.s > ego_travel + 450.0 {
             break;
         }
         for positive in [true, false] {
-            let s_line = if positive {
-                x.s + 0.5 * x.half_width
-            } else {
-                x.s - 0.5 * x.half_width
-            };
+            let s_line = cross_lane_line(x, positive);
             if !positive && turn_lane.is_some_and(|t| (t - s_line).abs() < 0.5) {
                 continue;
             }
             let mut dist = road.road_half + 12.0 + rng.range(0.0, 20.0);
             while dist < 160.0 {
-                let body = if rng.chance(0.9) {
-                    pick_car(rng)
-                } else {
-                    BodyType::Van
-                };
-                let model =
-                    VehicleModel::new(body, &mut rng.fork(20_000 + fleet.vehicles.len() as u64));
-                let v0 = rng.range(8.0, 11.0);
-                let idm = idm_for(rng, domain, v0, body);
+                let (model, idm) = cross_vehicle(rng, domain, 20_000 + fleet.vehicles.len());
                 let route = Route::Cross {
                     s_line,
                     positive,
@@ -792,15 +808,126 @@ fn populate_city_extras(fleet: &mut Fleet, road: &Road, rng: &mut Rng, ego_trave
     }
 }
 
+/// The lane line of the cross street the turning lead drives into (its -d lane), which
+/// cross traffic keeps free.
+fn turn_lane(vehicles: &[Vehicle]) -> Option<f32> {
+    match vehicles.get(LEAD).map(|v| v.route) {
+        Some(Route::Turn { s_turn, radius, .. }) => Some(s_turn + radius),
+        _ => None,
+    }
+}
+
+/// The body and driver of a vehicle on a cross street; `label` picks its paint and shape.
+fn cross_vehicle(rng: &mut Rng, domain: Domain, label: usize) -> (VehicleModel, Idm) {
+    let body = if rng.chance(0.9) {
+        pick_car(rng)
+    } else {
+        BodyType::Van
+    };
+    let model = VehicleModel::new(body, &mut rng.fork(label as u64));
+    let v0 = rng.range(CROSS_V0.0, CROSS_V0.1);
+    (model, idm_for(rng, domain, v0, body))
+}
+
+/// The lane line of the cross street of `x` driven towards +d (`positive`) or -d.
+fn cross_lane_line(x: &Intersection, positive: bool) -> f32 {
+    if positive {
+        x.s + 0.5 * x.half_width
+    } else {
+        x.s - 0.5 * x.half_width
+    }
+}
+
+/// Cross traffic for the rest of a long city recording, or `None` where the vehicles placed
+/// on the cross streets at the start last the whole recording.
+///
+/// Those vehicles have crossed after the first minute or so. For every intersection the ego
+/// comes near in `first` (the simulation without the stream), this adds vehicles far down
+/// both of its cross streets, each placed from its own desired speed so that it reaches the
+/// intersection while the ego is near (one every [`CROSS_HEADWAY_S`] seconds, what the
+/// cross street's short green lets through). Beyond [`CROSS_STREET_END`] they are neither
+/// drawn nor checked for collisions, so they appear down the street as they approach.
+fn cross_stream(
+    spec: &ScenarioSpec,
+    road: &Road,
+    first: &Traffic,
+    vehicles: &[Vehicle],
+    rng: &mut Rng,
+) -> Option<Vec<Vehicle>> {
+    if spec.domain != Domain::City || spec.frames <= CROSS_STREAM_FROM_FRAMES {
+        return None;
+    }
+    let t_start = -(WARMUP_FRAMES as f32) * FRAME_DT;
+    let turn_lane = turn_lane(vehicles);
+    let ego_s: Vec<f32> = first.states.iter().map(|st| st[EGO].s).collect();
+    let mut fleet = Fleet {
+        vehicles: vehicles.to_vec(),
+    };
+    for (xi, x) in road.intersections.iter().enumerate() {
+        let Some(fa) = ego_s.iter().position(|&s| s >= x.s - CROSS_WATCH.0) else {
+            break;
+        };
+        let fb = ego_s
+            .iter()
+            .rposition(|&s| s <= x.s + CROSS_WATCH.1)
+            .unwrap_or(fa);
+        let ta = fa as f32 * FRAME_DT - CROSS_WATCH_PAD_S;
+        let tb = fb as f32 * FRAME_DT + CROSS_WATCH_PAD_S;
+        for positive in [true, false] {
+            let s_line = cross_lane_line(x, positive);
+            if !positive && turn_lane.is_some_and(|t| (t - s_line).abs() < 0.5) {
+                continue;
+            }
+            let route = Route::Cross {
+                s_line,
+                positive,
+                intersection: xi,
+            };
+            // The start of the street's last vehicle placed so far.
+            let last = fleet
+                .vehicles
+                .iter()
+                .filter(|v| v.route == route)
+                .map(|v| -v.start)
+                .fold(road.road_half, f32::max);
+            let mut placed: Vec<(f32, VehicleModel, Idm)> = Vec::new();
+            let mut t = ta + rng.range(0.0, CROSS_HEADWAY_S.1);
+            while t < tb {
+                let label = 40_000 + fleet.vehicles.len() + placed.len();
+                let (model, idm) = cross_vehicle(rng, spec.domain, label);
+                placed.push((idm.v0 * (t - t_start), model, idm));
+                t += rng.range(CROSS_HEADWAY_S.0, CROSS_HEADWAY_S.1);
+            }
+            // A faster vehicle placed for a later arrival can start ahead of a slower one:
+            // they go down the street in order of their start, at least
+            // `CROSS_MIN_SPACING` apart, and the faster one follows. Arrivals that would
+            // start among the vehicles placed at the start are theirs already.
+            placed.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let mut dist = last;
+            for (want, model, idm) in placed {
+                if want < last + CROSS_MIN_SPACING {
+                    continue;
+                }
+                dist = want.max(dist + CROSS_MIN_SPACING);
+                fleet.add(Role::Cross, model, route, -dist, idm);
+            }
+        }
+    }
+    (fleet.vehicles.len() > vehicles.len()).then_some(fleet.vehicles)
+}
+
 /// Everything the acceleration of one vehicle depends on, for one instant.
 struct Snapshot<'a> {
     vehicles: &'a [Vehicle],
     poses: Vec<Pose>,
     /// Indices of main-road vehicles (not on a cross street) sorted by s.
     by_s: Vec<usize>,
-    /// Indices of the vehicles on a cross street, ascending: a crossing vehicle's leader is
-    /// one of them, and scanning all vehicles instead made long scenarios quadratic.
-    crossing: Vec<usize>,
+    /// The vehicles on each cross-street lane, each lane's in ascending index order: a
+    /// crossing vehicle's leader is one of its lane's, and long city scenarios have hundreds
+    /// of crossing vehicles on dozens of lanes.
+    cross_lanes: Vec<Vec<usize>>,
+    /// Each vehicle's lane in `cross_lanes` (meaningless for vehicles not on a cross street).
+    lane_of: Vec<usize>,
 }
 
 impl<'a> Snapshot<'a> {
@@ -810,14 +937,41 @@ impl<'a> Snapshot<'a> {
             .zip(dyns)
             .map(|(v, d)| pose_of(&v.route, d))
             .collect();
-        let (crossing, mut by_s): (Vec<usize>, Vec<usize>) =
-            (0..vehicles.len()).partition(|&i| poses[i].cross_lane.is_some());
+        let mut crossing: Vec<(bool, f32, usize)> = Vec::new();
+        let mut by_s: Vec<usize> = Vec::new();
+        for (i, p) in poses.iter().enumerate() {
+            match p.cross_lane {
+                Some((line, positive)) => crossing.push((positive, line, i)),
+                None => by_s.push(i),
+            }
+        }
         by_s.sort_by(|&a, &b| poses[a].s.total_cmp(&poses[b].s).then(a.cmp(&b)));
+        // A lane is a run of equal direction and lines within half a metre of its first: the
+        // two lanes of a street lie half its width apart, and streets tens of metres.
+        crossing.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2)));
+        let mut cross_lanes: Vec<Vec<usize>> = Vec::new();
+        let mut lane_of = vec![usize::MAX; vehicles.len()];
+        let mut lane_start = (f32::NAN, false);
+        for (positive, line, i) in crossing {
+            if lane_start.1 == positive && (line - lane_start.0).abs() < 0.5 {
+                if let Some(lane) = cross_lanes.last_mut() {
+                    lane.push(i);
+                }
+            } else {
+                lane_start = (line, positive);
+                cross_lanes.push(vec![i]);
+            }
+            lane_of[i] = cross_lanes.len() - 1;
+        }
+        for lane in &mut cross_lanes {
+            lane.sort_unstable();
+        }
         Self {
             vehicles,
             poses,
             by_s,
-            crossing,
+            cross_lanes,
+            lane_of,
         }
     }
 
@@ -833,21 +987,12 @@ impl<'a> Snapshot<'a> {
                 best = Some((gap, dyns[j].v));
             }
         };
-        if let Some((line, positive)) = p.cross_lane {
+        if let Some((_, positive)) = p.cross_lane {
             let sign = if positive { 1.0 } else { -1.0 };
-            for &j in &self.crossing {
-                let q = &self.poses[j];
-                if j == i {
-                    continue;
-                }
-                if let Some((l2, pos2)) = q.cross_lane
-                    && (l2 - line).abs() < 0.5
-                    && pos2 == positive
-                {
-                    let along = (q.d - p.d) * sign;
-                    if along > 0.0 {
-                        consider(j, along);
-                    }
+            for &j in &self.cross_lanes[self.lane_of[i]] {
+                let along = (self.poses[j].d - p.d) * sign;
+                if j != i && along > 0.0 {
+                    consider(j, along);
                 }
             }
             return best;
@@ -1295,10 +1440,27 @@ fn record(
                 steer: ((2.8 * kappa).atan() / 1.22).clamp(-1.0, 1.0),
                 brake_lights: !parked && (dy.brake_lights || emergency || dy.v < 0.05),
                 emergency,
-                departed: p.cross_lane.is_some() && p.d.abs() > CROSS_STREET_END,
+                beyond_street_end: p.cross_lane.is_some()
+                    && p.d.abs() > cross_street_end(road, p.s, p.d),
             }
         })
         .collect()
+}
+
+/// How far from the main road's centre line the cross street at arc length `s` reaches on
+/// the side of `d`: [`CROSS_STREET_END`], or less on the inner side of a bend. A cross
+/// street is a band of Frenet lines normal to the road, and on the bend's inner side those
+/// lines converge towards its centre: the street, and the distance between its two lanes,
+/// shrink by the factor `1 - κ·d`. It ends where they have shrunk to
+/// [`CROSS_STREET_SQUEEZE`], 87 m out at the sharpest bend, before vehicles in its two
+/// lanes could touch.
+fn cross_street_end(road: &Road, s: f32, d: f32) -> f32 {
+    let kappa = road.centerline.sample(s).kappa;
+    if kappa * d > 0.0 {
+        CROSS_STREET_END.min((1.0 - CROSS_STREET_SQUEEZE) / kappa.abs())
+    } else {
+        CROSS_STREET_END
+    }
 }
 
 /// Largest per-frame deceleration of vehicle `i` over the recorded frames (m/s²).
@@ -1365,7 +1527,7 @@ pub fn first_collision(traffic: &Traffic) -> Option<(u32, usize, usize)> {
                 if va.role == Role::Parked && vb.role == Role::Parked {
                     continue;
                 }
-                if st[a].departed || st[b].departed {
+                if st[a].beyond_street_end || st[b].beyond_street_end {
                     continue;
                 }
                 if footprints_overlap(&st[a], &va.model, &st[b], &vb.model, 0.05) {
