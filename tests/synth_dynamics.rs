@@ -205,6 +205,24 @@ fn the_maneuvering_vehicle_is_visible_while_it_maneuvers() {
 /// kilometres until it met other cross streets or the curving main road again (city,
 /// 2,000 frames), and a cut-in triggered 30 % into the recording found the cut-in vehicle
 /// already past the lead (highway, 800 frames).
+/// The one scenario `vadscope generate --kind K --domain D --weather sun --frames F
+/// --size 64x48 --seed S` plans.
+fn planned(kind: ScenarioKind, domain: Domain, frames: u32, seed: u64) -> ScenarioSpec {
+    let request = DatasetRequest {
+        kind: Some(KindChoice::Only(kind)),
+        domain: Some(if domain == Domain::City {
+            DomainChoice::City
+        } else {
+            DomainChoice::Highway
+        }),
+        weather: Some(WeatherChoice::Sun),
+        frames: Some(frames),
+        size: Some((64, 48)),
+        ..DatasetRequest::new(1, seed)
+    };
+    plan_dataset(&request).expect("plan").remove(0)
+}
+
 #[test]
 fn long_scenarios_build_for_seeds_that_used_to_fail() {
     let cases = [
@@ -214,20 +232,7 @@ fn long_scenarios_build_for_seeds_that_used_to_fail() {
         (ScenarioKind::CutIn, Domain::Highway, 800, 2),
     ];
     for (kind, domain, frames, seed) in cases {
-        // As `vadscope generate --kind K --domain D --frames F --seed S` plans it.
-        let request = DatasetRequest {
-            kind: Some(KindChoice::Only(kind)),
-            domain: Some(if domain == Domain::City {
-                DomainChoice::City
-            } else {
-                DomainChoice::Highway
-            }),
-            weather: Some(WeatherChoice::Sun),
-            frames: Some(frames),
-            size: Some((64, 48)),
-            ..DatasetRequest::new(1, seed)
-        };
-        let spec = plan_dataset(&request).expect("plan").remove(0);
+        let spec = planned(kind, domain, frames, seed);
         let sc = Scenario::build(&spec).unwrap_or_else(|e| panic!("{kind:?} seed {seed}: {e}"));
         let t = sc.traffic();
         assert_eq!(t.states.len(), frames as usize);
@@ -274,15 +279,7 @@ fn long_city_recordings_keep_their_cross_traffic() {
     // Two 100 s recordings whose cross streets had emptied after 70 s: the vehicles placed
     // at the start had all crossed.
     for seed in [5u64, 23] {
-        let request = DatasetRequest {
-            kind: Some(KindChoice::Only(ScenarioKind::Normal)),
-            domain: Some(DomainChoice::City),
-            weather: Some(WeatherChoice::Sun),
-            frames: Some(1000),
-            size: Some((64, 48)),
-            ..DatasetRequest::new(1, seed)
-        };
-        let spec = plan_dataset(&request).expect("plan").remove(0);
+        let spec = planned(ScenarioKind::Normal, Domain::City, 1000, seed);
         let sc = Scenario::build(&spec).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
         let t = sc.traffic();
         assert!(first_collision(t).is_none(), "seed {seed}");

@@ -788,11 +788,7 @@ fn populate_city_extras(fleet: &mut Fleet, road: &Road, rng: &mut Rng, ego_trave
         if x.s > ego_travel + 450.0 {
             break;
         }
-        for positive in [true, false] {
-            let s_line = cross_lane_line(x, positive);
-            if !positive && turn_lane.is_some_and(|t| (t - s_line).abs() < 0.5) {
-                continue;
-            }
+        for (positive, s_line) in cross_traffic_lanes(x, turn_lane) {
             let mut dist = road.road_half + 12.0 + rng.range(0.0, 20.0);
             while dist < 160.0 {
                 let (model, idm) = cross_vehicle(rng, domain, 20_000 + fleet.vehicles.len());
@@ -829,13 +825,25 @@ fn cross_vehicle(rng: &mut Rng, domain: Domain, label: usize) -> (VehicleModel, 
     (model, idm_for(rng, domain, v0, body))
 }
 
-/// The lane line of the cross street of `x` driven towards +d (`positive`) or -d.
-fn cross_lane_line(x: &Intersection, positive: bool) -> f32 {
-    if positive {
-        x.s + 0.5 * x.half_width
-    } else {
-        x.s - 0.5 * x.half_width
-    }
+/// The lanes of the cross street of `x` that cross traffic drives in, as (towards +d, lane
+/// line): both, but the -d lane that the turning lead drives into (`turn_lane`).
+fn cross_traffic_lanes(
+    x: &Intersection,
+    turn_lane: Option<f32>,
+) -> impl Iterator<Item = (bool, f32)> + '_ {
+    [true, false]
+        .into_iter()
+        .map(|positive| {
+            let line = if positive {
+                x.s + 0.5 * x.half_width
+            } else {
+                x.s - 0.5 * x.half_width
+            };
+            (positive, line)
+        })
+        .filter(move |&(positive, line)| {
+            positive || !turn_lane.is_some_and(|t| (t - line).abs() < 0.5)
+        })
 }
 
 /// Cross traffic for the rest of a long city recording, or `None` where the vehicles placed
@@ -873,11 +881,7 @@ fn cross_stream(
             .unwrap_or(fa);
         let ta = fa as f32 * FRAME_DT - CROSS_WATCH_PAD_S;
         let tb = fb as f32 * FRAME_DT + CROSS_WATCH_PAD_S;
-        for positive in [true, false] {
-            let s_line = cross_lane_line(x, positive);
-            if !positive && turn_lane.is_some_and(|t| (t - s_line).abs() < 0.5) {
-                continue;
-            }
+        for (positive, s_line) in cross_traffic_lanes(x, turn_lane) {
             let route = Route::Cross {
                 s_line,
                 positive,
@@ -1422,10 +1426,11 @@ fn record(
             } else {
                 (0.2 + 0.5 * dy.a.max(0.0) / v.idm.a_max + 0.3 * dy.v / v.idm.v0.max(1.0)).min(1.0)
             };
+            let road_kappa = road.centerline.sample(p.s).kappa;
             let kappa = if p.turning {
                 -1.0 / TURN_RADIUS
             } else {
-                road.centerline.sample(p.s).kappa * p.dir
+                road_kappa * p.dir
             };
             VehicleState {
                 x,
@@ -1441,21 +1446,21 @@ fn record(
                 brake_lights: !parked && (dy.brake_lights || emergency || dy.v < 0.05),
                 emergency,
                 beyond_street_end: p.cross_lane.is_some()
-                    && p.d.abs() > cross_street_end(road, p.s, p.d),
+                    && p.d.abs() > cross_street_end(road_kappa, p.d),
             }
         })
         .collect()
 }
 
-/// How far from the main road's centre line the cross street at arc length `s` reaches on
-/// the side of `d`: [`CROSS_STREET_END`], or less on the inner side of a bend. A cross
+/// How far from the main road's centre line a cross street where the road's curvature is
+/// `kappa` reaches on the side of `d`: [`CROSS_STREET_END`], or less on the inner side of
+/// a bend. A cross
 /// street is a band of Frenet lines normal to the road, and on the bend's inner side those
 /// lines converge towards its centre: the street, and the distance between its two lanes,
 /// shrink by the factor `1 - κ·d`. It ends where they have shrunk to
 /// [`CROSS_STREET_SQUEEZE`], 87 m out at the sharpest bend, before vehicles in its two
 /// lanes could touch.
-fn cross_street_end(road: &Road, s: f32, d: f32) -> f32 {
-    let kappa = road.centerline.sample(s).kappa;
+fn cross_street_end(kappa: f32, d: f32) -> f32 {
     if kappa * d > 0.0 {
         CROSS_STREET_END.min((1.0 - CROSS_STREET_SQUEEZE) / kappa.abs())
     } else {
