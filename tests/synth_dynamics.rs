@@ -201,10 +201,6 @@ fn the_maneuvering_vehicle_is_visible_while_it_maneuvers() {
     }
 }
 
-/// Long recordings, with the seeds that used to fail. Cross-street traffic drove on for
-/// kilometres until it met other cross streets or the curving main road again (city,
-/// 2,000 frames), and a cut-in triggered 30 % into the recording found the cut-in vehicle
-/// already past the lead (highway, 800 frames).
 /// The one scenario `vadscope generate --kind K --domain D --weather sun --frames F
 /// --size 64x48 --seed S` plans.
 fn planned(kind: ScenarioKind, domain: Domain, frames: u32, seed: u64) -> ScenarioSpec {
@@ -223,6 +219,10 @@ fn planned(kind: ScenarioKind, domain: Domain, frames: u32, seed: u64) -> Scenar
     plan_dataset(&request).expect("plan").remove(0)
 }
 
+/// Long recordings, with the seeds that used to fail. Cross-street traffic drove on for
+/// kilometres until it met other cross streets or the curving main road again (city,
+/// 2,000 frames), and a cut-in triggered 30 % into the recording found the cut-in vehicle
+/// already past the lead (highway, 800 frames).
 #[test]
 fn long_scenarios_build_for_seeds_that_used_to_fail() {
     let cases = [
@@ -270,8 +270,9 @@ fn long_scenarios_build_for_seeds_that_used_to_fail() {
     }
 }
 
-/// Where a city cross street ends at the latest: 87 m out on the inner side of the
-/// sharpest bend (radius 350 m), where the street has narrowed to three quarters.
+/// A little less than the nearest a city cross street ends to the main road: 87 m out on
+/// the inner side of the sharpest bend (radius 350 m), where the street has narrowed to three
+/// quarters of its width.
 const LEAST_CROSS_STREET_END: f32 = 85.0;
 
 #[test]

@@ -1454,10 +1454,9 @@ fn record(
 
 /// How far from the main road's centre line a cross street where the road's curvature is
 /// `kappa` reaches on the side of `d`: [`CROSS_STREET_END`], or less on the inner side of
-/// a bend. A cross
-/// street is a band of Frenet lines normal to the road, and on the bend's inner side those
-/// lines converge towards its centre: the street, and the distance between its two lanes,
-/// shrink by the factor `1 - κ·d`. It ends where they have shrunk to
+/// a bend. A cross street is a band of Frenet lines normal to the road, and on the bend's
+/// inner side those lines converge towards its centre: the street, and the distance between
+/// its two lanes, shrink by the factor `1 - κ·d`. It ends where they have shrunk to
 /// [`CROSS_STREET_SQUEEZE`], 87 m out at the sharpest bend, before vehicles in its two
 /// lanes could touch.
 fn cross_street_end(kappa: f32, d: f32) -> f32 {
