@@ -16,6 +16,7 @@ use std::time::Duration;
 
 use burn::tensor::Device;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use vadscope::model::stc::CubeGeometry;
 use vadscope::model::{
     CheckpointMeta, Detector, Hf2Vad, ModelConfig, NoiseRng, PixelStats, ScoreStats, TrainingStats,
 };
@@ -97,12 +98,8 @@ fn bench_scoring(c: &mut Criterion) {
         group.bench_function(scenario.name(), |b| {
             b.iter(|| {
                 let mut boxes = BoxProvider::new(&scenario, &request.boxes).expect("boxes");
-                let mut cubes = ScenarioCubes::new(
-                    &scenario,
-                    request.flow,
-                    config.clip_hist,
-                    config.patch_size,
-                );
+                let mut cubes =
+                    ScenarioCubes::new(&scenario, request.flow, CubeGeometry::of(&config));
                 run_scoring(
                     &plan,
                     &mut boxes,

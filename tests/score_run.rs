@@ -86,6 +86,7 @@ fn cube(b: BoxRecord, flow: f32, frame: u8) -> Cube {
         box_index: 0,
         frames: vec![frame; 3 * (T + 1) * AREA],
         flows: vec![flow; 2 * T * AREA],
+        flow_scale: [1.0, 1.0],
         bbox: b,
     }
 }
@@ -283,6 +284,7 @@ fn missing_statistics_and_wrong_cube_sizes_are_errors() {
                 box_index: 0,
                 frames: vec![0; 5],
                 flows: vec![],
+                flow_scale: [1.0, 1.0],
                 bbox: *b,
             })
             .collect())
@@ -338,6 +340,7 @@ fn a_real_detector_scores_a_scenario_through_the_seams() {
                 box_index: 0,
                 frames: vec![100; 3 * (t + 1) * p * p],
                 flows: vec![i as f32; 2 * t * p * p],
+                flow_scale: [1.0, 1.0],
                 bbox: *b,
             })
             .collect())

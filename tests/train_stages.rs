@@ -139,6 +139,43 @@ fn three_stages_reduce_their_losses_and_the_checkpoint_reproduces_the_model() {
 }
 
 #[test]
+fn jointly_reconstructed_flows_train_in_every_stage() {
+    let config = ModelConfig {
+        joint_flows: true,
+        ..tiny_config()
+    };
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut events = Vec::new();
+    let report = train(
+        &config,
+        &tiny_training(3),
+        &synthetic_cubes(),
+        dir.path(),
+        &mut |e| events.push(e.clone()),
+    )
+    .expect("training");
+    let stage1: Vec<f64> = events
+        .iter()
+        .filter_map(|e| match e {
+            TrainEvent::EpochDone {
+                stage: 1,
+                train_loss,
+                ..
+            } => Some(*train_loss),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(stage1.len(), 3);
+    assert!(
+        stage1[2] < stage1[0],
+        "stage 1 loss did not fall: {stage1:?}"
+    );
+    let meta = read_checkpoint_meta(&report.checkpoint).expect("meta");
+    assert!(meta.config.joint_flows);
+    assert!(report.stats.flow_score.mean.is_finite() && report.stats.flow_score.mean > 0.0);
+}
+
+#[test]
 fn interrupted_training_resumes_to_the_same_model() {
     let whole = tempfile::tempdir().expect("temp dir");
     let whole_report = run(whole.path(), 2, &mut Vec::new());

@@ -11,8 +11,9 @@ use clap::{Args, ValueEnum};
 use rayon::prelude::*;
 use serde::Serialize;
 use vadscope::score::{
-    BoxSource, EvalRow, FrameMetricOptions, FusionWeights, Grouping, PixelReferenceMode, PixelRoc,
-    ScenarioScores, ScoreCache, SweepRow, TableFormat, add_scenario_pixels_each, evaluate_table,
+    Baseline, BoxSource, EvalRow, FlowProvider, FlowSource, FrameMetricOptions, FrameSeries,
+    FusionWeights, Grouping, PixelReferenceMode, PixelRoc, ScenarioScores, ScoreCache, SweepRow,
+    TableFormat, add_scenario_pixels_each, baseline_frame_scores, evaluate_series, evaluate_table,
     render_eval_table, render_sweep_table, sweep_grid, sweep_weights,
 };
 use vadscope::sequence::Scenario;
@@ -64,6 +65,11 @@ pub struct EvalArgs {
     /// scored scenario, or the reference code's per-batch statistics.
     #[arg(long, value_enum, default_value = "training")]
     pixel_reference: PixelReferenceArg,
+    /// Also evaluate trivial baselines on the same scored boxes and protocol (flow energy,
+    /// looming, frame difference; the ego's deceleration where ACTION data exists) and say
+    /// by how much the model beats the best image-only one.
+    #[arg(long)]
+    baselines: bool,
     /// IoU at which a scored box counts as finding a ground-truth box.
     #[arg(long, default_value_t = 0.5, value_name = "IOU")]
     iou: f32,
@@ -113,6 +119,93 @@ struct JsonReport<'a> {
     table2: &'a [EvalRow],
     #[serde(skip_serializing_if = "Option::is_none")]
     table3: Option<&'a [SweepRow]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    baselines: Option<&'a [EvalRow]>,
+}
+
+/// The baseline rows over `scored` (one series per baseline, box source and scenario,
+/// labelled "baseline: NAME (BOX SOURCE)") and their source labels by baseline.
+fn baseline_rows(
+    scored: &[Scored],
+    sources: &[BoxSource],
+    flow: FlowSource,
+    options: &FrameMetricOptions,
+    grouping: Grouping,
+) -> anyhow::Result<Vec<EvalRow>> {
+    let per_source = scored.len() / sources.len().max(1);
+    let series: Vec<Vec<FrameSeries>> = scored
+        .par_iter()
+        .enumerate()
+        .map(|(k, s)| {
+            let source = &sources[k / per_source.max(1)];
+            let table = s.cache.table();
+            let mut flows = FlowProvider::new(s.scenario, flow);
+            let meta = s.scenario.meta();
+            let mut out = Vec::new();
+            for baseline in Baseline::ALL {
+                let raw = baseline_frame_scores(baseline, s.scenario, table, &mut flows)
+                    .with_context(|| {
+                        format!(
+                            "baseline {} of {}",
+                            baseline.name(),
+                            s.scenario.root().display()
+                        )
+                    })?;
+                if let Some(raw) = raw {
+                    out.push(FrameSeries {
+                        name: s.scenario.name().to_string(),
+                        domain: meta.domain,
+                        weather: meta.weather,
+                        source: format!("baseline: {} ({})", baseline.name(), source.label()),
+                        labels: s.scenario.frame_labels().flags.clone(),
+                        raw,
+                        skip_first: table.meta.clip_hist as usize,
+                    });
+                }
+            }
+            Ok(out)
+        })
+        .collect::<anyhow::Result<_>>()?;
+    // Rows grouped by baseline, then box source, as they were generated per scenario.
+    let mut flat: Vec<FrameSeries> = series.into_iter().flatten().collect();
+    flat.sort_by_key(|s| {
+        Baseline::ALL
+            .iter()
+            .position(|b| s.source.starts_with(&format!("baseline: {}", b.name())))
+    });
+    Ok(evaluate_series(&flat, options, grouping)?)
+}
+
+/// One line per model row over all scenarios: its AUROC against the best image-only
+/// baseline's on the same box source, in points.
+fn margin_lines(rows: &[EvalRow], baselines: &[EvalRow]) -> Vec<String> {
+    let auroc = |r: &EvalRow| r.metrics.as_ref().map(|m| m.auroc);
+    rows.iter()
+        .filter(|r| r.domain.is_none() && r.weather.is_none())
+        .filter_map(|r| {
+            let model = auroc(r)?;
+            let best = baselines
+                .iter()
+                .filter(|b| b.domain.is_none() && b.weather.is_none())
+                .filter(|b| b.box_source.ends_with(&format!("({})", r.box_source)))
+                .filter(|b| {
+                    Baseline::ALL
+                        .iter()
+                        .filter(|x| !x.uses_ego_data())
+                        .any(|x| b.box_source.starts_with(&format!("baseline: {}", x.name())))
+                })
+                .filter_map(|b| Some((auroc(b)?, b.box_source.as_str())))
+                .max_by(|a, b| a.0.total_cmp(&b.0))?;
+            Some(format!(
+                "{}: model frame AUROC {:.1} %, best image-only baseline {:.1} % ({}): {:+.1} points",
+                r.box_source,
+                100.0 * model,
+                100.0 * best.0,
+                best.1,
+                100.0 * (model - best.0)
+            ))
+        })
+        .collect()
 }
 
 /// One scored scenario for one box source.
@@ -221,6 +314,18 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
         None
     };
 
+    let baselines = if args.baselines {
+        Some(baseline_rows(
+            &scored,
+            &sources,
+            args.run.flow,
+            &options,
+            grouping,
+        )?)
+    } else {
+        None
+    };
+
     let format = match args.format {
         FormatArg::Json => {
             let report = JsonReport {
@@ -229,6 +334,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
                 grouping,
                 table2: &rows,
                 table3: sweep.as_deref(),
+                baselines: baselines.as_deref(),
             };
             println!("{}", serde_json::to_string_pretty(&report)?);
             return Ok(ExitCode::SUCCESS);
@@ -268,6 +374,22 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
             ),
             render_sweep_table(sweep, format)
         );
+    }
+    if let Some(baselines) = &baselines {
+        println!();
+        print!(
+            "{}{}",
+            heading(
+                "Baselines: trivial frame scores on the same scored boxes, frames, median filter and metrics (the ego's deceleration uses ego data the method does not see)"
+            ),
+            render_eval_table(baselines, format)
+        );
+        if format != TableFormat::Csv {
+            println!();
+            for line in margin_lines(&rows, baselines) {
+                println!("{line}");
+            }
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -53,7 +53,7 @@ pub struct RunArgs {
     /// flows), `auto[:preset]` (stored where present, else DIS). Presets: ultrafast, fast,
     /// medium (default), quality.
     #[arg(long, default_value = "auto", value_name = "stored|dis[:preset]", value_parser = parse_flow_source)]
-    flow: FlowSource,
+    pub flow: FlowSource,
     /// Cubes sent to the model at once (the reference's per-batch pixel statistics are
     /// gathered over 128 cubes whatever this is).
     #[arg(long, default_value_t = 128, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=65536))]

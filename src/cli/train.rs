@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use vadscope::model::{ModelConfig, TrainingStats, read_checkpoint_meta};
+use vadscope::model::{BoxFilter, FlowUnits, ModelConfig, TrainingStats, read_checkpoint_meta};
 use vadscope::train::scenarios::{
     CubeExtraction, TrainRequest, scenario_folders, train_from_scenarios,
 };
@@ -98,9 +98,27 @@ pub struct TrainArgs {
     /// Seed of initialisation, shuffling, dropout, latent noise and the split (default 0).
     #[arg(long, value_name = "S")]
     seed: Option<u64>,
-    /// Use every n-th frame of each scenario as a cube target (default 1: every frame).
+    /// Use every n-th frame of each scenario as a cube target, from frame `clip_hist` on
+    /// (default 1: every frame).
     #[arg(long, value_name = "N", default_value_t = 1)]
     frame_stride: usize,
+    /// Which boxes give cubes, recorded in the model so scoring keeps the same ones:
+    /// `keep-all` (the reference) or `driving` (at least 1/400 of the frame area, not cut by
+    /// the image edge). Default: the preset's.
+    #[arg(long, value_enum, conflicts_with = "init")]
+    box_filter: Option<BoxFilterArg>,
+    /// Smallest box area kept, as a fraction of the frame area (overrides the fraction of
+    /// --box-filter).
+    #[arg(long, value_name = "F", conflicts_with = "init")]
+    min_box_area: Option<f32>,
+    /// Units of the flows the model sees: `native` pixels (the reference) or `patch`
+    /// pixels (each box's motion divided by its size, so near and far objects compare).
+    #[arg(long, value_enum, conflicts_with = "init")]
+    flow_units: Option<FlowUnitsArg>,
+    /// ML-MemAE-SC reconstructs a cube's flows jointly (all of them in one pass) instead of
+    /// each on its own as the reference does.
+    #[arg(long, conflicts_with = "init")]
+    joint_flows: bool,
     /// Worker threads of the CPU backend (default: all cores).
     #[arg(long, value_name = "N")]
     threads: Option<usize>,
@@ -131,6 +149,20 @@ impl StageArg {
     }
 }
 
+/// The box filters `--box-filter` can choose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum BoxFilterArg {
+    KeepAll,
+    Driving,
+}
+
+/// The flow units `--flow-units` can choose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum FlowUnitsArg {
+    Native,
+    Patch,
+}
+
 /// The model presets `--preset` can choose.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum PresetArg {
@@ -145,6 +177,30 @@ impl PresetArg {
             PresetArg::Paper => ModelConfig::paper(),
         }
     }
+}
+
+/// `model` with the options beyond the paper that the command line sets.
+fn with_model_options(mut model: ModelConfig, args: &TrainArgs) -> anyhow::Result<ModelConfig> {
+    match args.box_filter {
+        Some(BoxFilterArg::KeepAll) => model.box_filter = BoxFilter::KEEP_ALL,
+        Some(BoxFilterArg::Driving) => model.box_filter = BoxFilter::DRIVING,
+        None => {}
+    }
+    if let Some(f) = args.min_box_area {
+        model.box_filter.min_area_fraction = f;
+    }
+    match args.flow_units {
+        Some(FlowUnitsArg::Native) => model.conventions.flow_units = FlowUnits::NativePixels,
+        Some(FlowUnitsArg::Patch) => model.conventions.flow_units = FlowUnits::Patch,
+        None => {}
+    }
+    if args.joint_flows {
+        model.joint_flows = true;
+    }
+    model
+        .validate()
+        .context("the model options do not describe a usable model")?;
+    Ok(model)
 }
 
 /// The training settings: `--config` (or the defaults), then the command-line overrides.
@@ -252,6 +308,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<ExitCode> {
         (None, Some(path)) => model_config(path)?,
         (None, None) => args.preset.unwrap_or(PresetArg::Compact).config(),
     };
+    let model = with_model_options(model, &args)?;
     let train = train_config(&args)?;
     if args.frame_stride == 0 {
         bail!("--frame-stride must be at least 1");

@@ -239,3 +239,41 @@ pub fn load_checkpoint(path: &Path, device: &Device) -> Result<Checkpoint, Model
         .map_err(|e| ModelError::load(path, e))?;
     Ok(Checkpoint { model, meta })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{BoxFilter, Detector, FlowUnits};
+
+    #[test]
+    fn options_beyond_the_paper_survive_a_checkpoint_and_drive_inference() {
+        let mut config = ModelConfig::parity();
+        config.conventions.flow_units = FlowUnits::Patch;
+        config.box_filter = BoxFilter::DRIVING;
+        config.joint_flows = true;
+        let device = Device::flex();
+        let model = Hf2Vad::new(&config, &device, &mut NoiseRng::new(4)).expect("model");
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("joint.safetensors");
+        let meta = CheckpointMeta {
+            config: config.clone(),
+            stats: None,
+            note: None,
+        };
+        save_checkpoint(&path, &model, &meta).expect("save");
+        assert_eq!(read_checkpoint_meta(&path).expect("meta").config, config);
+
+        let detector = Detector::from_checkpoint(&path).expect("load");
+        assert_eq!(detector.config(), &config);
+        let p = config.patch_size;
+        let frames = vec![0.5; 2 * config.cube_frame_channels() * p * p];
+        let flows = NoiseRng::new(5).normal_vec(2 * config.cube_flow_channels() * p * p, 0.0, 1.0);
+        let out = detector.infer(&frames, &flows).expect("infer");
+        assert_eq!(out.len(), 2);
+        assert_eq!(
+            out[0].recon_flows.len(),
+            config.cube_flow_channels() * p * p
+        );
+        assert!(out.iter().all(|c| c.s_r.is_finite() && c.s_r > 0.0));
+    }
+}

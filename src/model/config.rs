@@ -5,6 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::box_filter::BoxFilter;
 use super::error::ModelError;
 
 /// Number of colour channels of a frame.
@@ -38,6 +39,12 @@ pub enum ColorOrder {
 pub enum FlowUnits {
     /// Displacements in pixels of the frame the flow belongs to (vadscope's convention).
     NativePixels,
+    /// Displacements in pixels of the P×P patch: native u is multiplied by P / (crop width)
+    /// and native v by P / (crop height) of each cube, so a box's motion reads the same
+    /// whatever its size in the image (vadscope's option beyond the paper; the reference
+    /// keeps native pixels). The factors depend on the box, so they are applied where the
+    /// cube is cut ([`super::stc`]); [`FlowUnits::factors`] is (1, 1) for this variant.
+    Patch,
     /// Displacements in pixels of a resized grid: native u is multiplied by `x` and native v
     /// by `y` before the model sees them. The reference leaves FlowNet2 flows in its input
     /// grid (e.g. 1024×640 for 768×512 CARLA frames: x = 4/3, y = 5/4).
@@ -53,7 +60,7 @@ impl FlowUnits {
     /// The (u, v) factors that turn native-pixel flows into the model's units.
     pub fn factors(&self) -> [f32; 2] {
         match self {
-            FlowUnits::NativePixels => [1.0, 1.0],
+            FlowUnits::NativePixels | FlowUnits::Patch => [1.0, 1.0],
             FlowUnits::Scaled { x, y } => [*x, *y],
         }
     }
@@ -121,6 +128,15 @@ pub struct ModelConfig {
     pub dropout: f64,
     /// What the weights expect as input.
     pub conventions: InputConventions,
+    /// Which boxes are scored and trained on. Recorded so that scoring filters exactly as
+    /// training did; absent in older checkpoints, which keep every box (the default).
+    #[serde(default)]
+    pub box_filter: BoxFilter,
+    /// ML-MemAE-SC reconstructs the cube's `num_flows` flows jointly (2·t channels in and
+    /// out), so a change of motion across the cube is part of what it learns; the
+    /// reference (`false`, the default) reconstructs each flow on its own.
+    #[serde(default)]
+    pub joint_flows: bool,
 }
 
 impl ModelConfig {
@@ -141,6 +157,8 @@ impl ModelConfig {
             nf_max: 128,
             dropout: 0.1,
             conventions: InputConventions::vadscope(),
+            box_filter: BoxFilter::KEEP_ALL,
+            joint_flows: false,
         }
     }
 
@@ -209,6 +227,16 @@ impl ModelConfig {
         self.num_flows * FLOW_CHANNELS
     }
 
+    /// Channels of one ML-MemAE-SC pass: all of a cube's flows when they are reconstructed
+    /// jointly, else one flow's two.
+    pub fn memae_channels(&self) -> usize {
+        if self.joint_flows {
+            self.cube_flow_channels()
+        } else {
+            FLOW_CHANNELS
+        }
+    }
+
     /// Width of CVAE encoder stage `s` (1-based): `min(nf_start · 2^(s−1), nf_max)`.
     pub fn stage_width(&self, stage: usize) -> usize {
         let mut nf = self.nf_start;
@@ -269,6 +297,7 @@ impl ModelConfig {
         {
             return bad(format!("flow scale factors ({x}, {y}) must be positive"));
         }
+        self.box_filter.validate()?;
         Ok(())
     }
 
@@ -281,7 +310,7 @@ impl ModelConfig {
         let double = |cin: usize, cout: usize| {
             conv(cin, cout, 3) + bn(cout) + conv(cout, cout, 3) + bn(cout)
         };
-        let mut memae = double(FLOW_CHANNELS, fr);
+        let mut memae = double(self.memae_channels(), fr);
         for level in 1..=3 {
             let (cin, cout) = (fr << (level - 1), fr << level);
             memae += conv(cin, cout, 3) + double(cout, cout);
@@ -298,7 +327,7 @@ impl ModelConfig {
             };
             memae += double(fused, cout);
         }
-        memae += conv(fr, FLOW_CHANNELS, 1);
+        memae += conv(fr, self.memae_channels(), 1);
 
         // NormConv2d: conv weight + bias + weight_g + gamma + beta.
         let nconv = |cin: usize, cout: usize, k: usize| cin * cout * k * k + 4 * cout;
@@ -384,6 +413,43 @@ mod tests {
         c.num_flows = 3;
         assert!(c.validate().is_err());
         assert!(ModelConfig::preset("huge").is_err());
+    }
+
+    #[test]
+    fn options_beyond_the_paper_round_trip_and_older_configs_read_as_the_reference() {
+        let mut c = ModelConfig::compact();
+        c.conventions.flow_units = FlowUnits::Patch;
+        c.box_filter = BoxFilter {
+            min_area_fraction: 0.0025,
+            drop_truncated: true,
+        };
+        c.joint_flows = true;
+        let back: ModelConfig =
+            serde_json::from_str(&serde_json::to_string(&c).expect("serialise")).expect("parse");
+        assert_eq!(back, c);
+        // A config written before these fields existed reads as the reference behaviour.
+        let mut old = serde_json::to_value(ModelConfig::compact()).expect("value");
+        let object = old.as_object_mut().expect("object");
+        object.remove("box_filter");
+        object.remove("joint_flows");
+        let old: ModelConfig = serde_json::from_value(old).expect("parse old");
+        assert_eq!(old, ModelConfig::compact());
+        assert_eq!(old.box_filter, BoxFilter::KEEP_ALL);
+        assert!(!old.joint_flows);
+    }
+
+    #[test]
+    fn joint_flows_widen_only_the_flow_autoencoders_ends() {
+        let mut joint = ModelConfig::compact();
+        joint.joint_flows = true;
+        joint.validate().expect("valid");
+        let fr = joint.feature_root;
+        let extra_in = 6 * fr * 9; // first conv: 6 more input channels, 3×3
+        let extra_out = 6 * fr + 6; // 1×1 output conv: 6 more outputs and biases
+        assert_eq!(
+            joint.parameter_count(),
+            ModelConfig::compact().parameter_count() + extra_in + extra_out
+        );
     }
 
     #[test]

@@ -20,6 +20,8 @@ pub struct Hf2Vad {
     pub vunet: Vunet,
     /// Past frames t (the cube has t + 1 frames and t flows).
     pub clip_hist: usize,
+    /// Whether ML-MemAE-SC takes all t flows in one pass ([`ModelConfig::joint_flows`]).
+    pub joint_flows: bool,
 }
 
 /// Everything one HF²-VAD pass produces.
@@ -28,7 +30,8 @@ pub struct Hf2VadOutput {
     /// Reconstructed flows, [B, 2·t, H, W], flow j in channels 2j..2j+2.
     pub of_recon: Tensor<4>,
     /// Attention of mem1, mem2, mem3 over all flow passes, flow-major: row `j·B + b` is flow
-    /// j of sample b ([t·B, slots] each, as the reference concatenates them).
+    /// j of sample b ([t·B, slots] each, as the reference concatenates them); [B, slots]
+    /// when the flows are reconstructed jointly.
     pub attention: [Tensor<2>; 3],
     /// The CVAE outputs (predicted frame, posterior/prior means, features).
     pub cvae: VunetOutput,
@@ -46,17 +49,23 @@ impl Hf2Vad {
             memae: MlMemAeSc::new(config, device, rng),
             vunet: Vunet::new(config, device, rng),
             clip_hist: config.clip_hist,
+            joint_flows: config.joint_flows,
         })
     }
 
     /// Reconstructs every flow of `flows` [B, 2·t, H, W] with ML-MemAE-SC.
     ///
-    /// With BatchNorm in eval mode the t flows go through as one batch of t·B; with batch
+    /// Jointly reconstructed flows go through as they are, one pass of B. Otherwise, with
+    /// BatchNorm in eval mode the t flows go through as one batch of t·B; with batch
     /// statistics active (stage-3 fine-tuning) they go one pass per flow, as the reference,
     /// so that each pass normalises and updates the running stats with its own flow.
     pub fn reconstruct_flows(&self, flows: Tensor<4>) -> (Tensor<4>, [Tensor<2>; 3]) {
         let [b, _, h, w] = flows.dims();
         let t = self.clip_hist;
+        if self.joint_flows {
+            let out = self.memae.forward(flows);
+            return (out.recon, out.attention);
+        }
         if self.memae.batch_statistics(&flows.device()) {
             let mut recons = Vec::with_capacity(t);
             let mut atts: [Vec<Tensor<2>>; 3] = [Vec::new(), Vec::new(), Vec::new()];

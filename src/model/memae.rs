@@ -6,7 +6,7 @@ use burn::nn::conv::{Conv2d, ConvTranspose2d};
 use burn::tensor::activation::{relu, softmax};
 use burn::tensor::{Device, Tensor};
 
-use super::config::{FLOW_CHANNELS, ModelConfig, SkipOp};
+use super::config::{ModelConfig, SkipOp};
 use super::gemm_conv::{Activation, ConvGeometry, GemmConv2d, GemmConvTranspose2d, memory_scores};
 use super::layers::{BatchNorm2d, kaiming_conv, param, upsampling_conv};
 use super::rng::NoiseRng;
@@ -281,7 +281,7 @@ pub struct MlMemAeSc {
     pub up_2: Up,
     /// Decoder level 1 → full resolution.
     pub up_1: Up,
-    /// Linear 1×1 output conv to 2 channels.
+    /// Linear 1×1 output conv to the flow channels of one pass (2, or 2·t when joint).
     pub out_conv: Conv2d,
     /// Slots per memory (for the dummy attention of disabled memories).
     pub num_slots: usize,
@@ -306,7 +306,7 @@ impl MlMemAeSc {
             })
         };
         Self {
-            in_conv: DoubleConv::new(FLOW_CHANNELS, fr, device, rng),
+            in_conv: DoubleConv::new(config.memae_channels(), fr, device, rng),
             down_1: Down::new(fr, 2 * fr, device, rng),
             down_2: Down::new(2 * fr, 4 * fr, device, rng),
             down_3: Down::new(4 * fr, 8 * fr, device, rng),
@@ -316,7 +316,7 @@ impl MlMemAeSc {
             up_3: Up::new(8 * fr, config.skip_ops[2], device, rng),
             up_2: Up::new(4 * fr, config.skip_ops[1], device, rng),
             up_1: Up::new(2 * fr, config.skip_ops[0], device, rng),
-            out_conv: kaiming_conv([fr, FLOW_CHANNELS], 1, 1, 0, device, rng),
+            out_conv: kaiming_conv([fr, config.memae_channels()], 1, 1, 0, device, rng),
             num_slots: config.num_slots,
             out_lowered: None,
         }

@@ -6,6 +6,7 @@
 //! decisions (Part A) sit on top: deterministic inference with posterior means, RGB frames
 //! and native-pixel flows, recorded per checkpoint in [`InputConventions`].
 
+pub mod box_filter;
 pub mod bundled;
 pub mod checkpoint;
 pub mod config;
@@ -22,6 +23,7 @@ pub mod stc;
 pub mod vunet;
 pub mod weights;
 
+pub use box_filter::BoxFilter;
 pub use bundled::{BUNDLED_MODEL_FILE, MODEL_ENV, bundled_model};
 pub use checkpoint::{
     Checkpoint, CheckpointMeta, load_checkpoint, read_checkpoint_meta, save_checkpoint,

@@ -19,15 +19,42 @@ use image::RgbImage;
 
 use crate::sequence::{BoxRecord, FlowField, Scenario};
 
+use super::config::{FlowUnits, ModelConfig};
 use super::error::ModelError;
+
+/// How cubes are cut: history, patch side and the units their flows are given in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CubeGeometry {
+    /// Past frames per cube t (the cube holds t + 1 frames and t flows).
+    pub clip_hist: usize,
+    /// Side P of the square patches.
+    pub patch: usize,
+    /// Flows in patch pixels ([`FlowUnits::Patch`]) instead of native pixels.
+    pub patch_units: bool,
+}
+
+impl CubeGeometry {
+    /// The cubes `config`'s model reads.
+    pub fn of(config: &ModelConfig) -> Self {
+        Self {
+            clip_hist: config.clip_hist,
+            patch: config.patch_size,
+            patch_units: config.conventions.flow_units == FlowUnits::Patch,
+        }
+    }
+}
 
 /// One cube: frames and flows of one box, channel-major.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Cube {
     /// RGB bytes [3·(t+1), P, P], frame i−t first, frame i (the target) last.
     pub frames: Vec<u8>,
-    /// Flows [2·t, P, P] in native pixels, flow stored at frame i−t+1 first; (u, v) each.
+    /// Flows [2·t, P, P], flow stored at frame i−t+1 first; (u, v) each. Native pixels
+    /// multiplied by `flow_scale`.
     pub flows: Vec<f32>,
+    /// Factors (u, v) that turned native pixels into the units of `flows`: (1, 1), or
+    /// P / crop size for flows in patch units.
+    pub flow_scale: [f32; 2],
     /// Index of the box within its frame's box list.
     pub box_index: usize,
     /// The box that cropped the cube.
@@ -147,14 +174,16 @@ fn crop_flow(
 pub fn cubes_at(
     index: usize,
     boxes: &[BoxRecord],
-    clip_hist: usize,
-    patch: usize,
+    geometry: CubeGeometry,
     frame: &mut dyn FnMut(usize) -> Result<Arc<RgbImage>, ModelError>,
     flow: &mut dyn FnMut(usize) -> Result<Option<Arc<FlowField>>, ModelError>,
 ) -> Result<Vec<Cube>, ModelError> {
     if boxes.is_empty() {
         return Ok(Vec::new());
     }
+    let CubeGeometry {
+        clip_hist, patch, ..
+    } = geometry;
     let frames = frame_indices(index, clip_hist)
         .into_iter()
         .map(&mut *frame)
@@ -212,6 +241,15 @@ pub fn cubes_at(
         for (f, out) in frames.iter().zip(cube_frames.chunks_mut(3 * area)) {
             crop_frame(f, (xr, yr), patch, out);
         }
+        // Patch units: the displacement as it appears in the P×P patch.
+        let flow_scale = if geometry.patch_units {
+            [
+                patch as f32 / (xr.1 - xr.0) as f32,
+                patch as f32 / (yr.1 - yr.0) as f32,
+            ]
+        } else {
+            [1.0, 1.0]
+        };
         let mut cube_flows = vec![0f32; 2 * clip_hist * area];
         for (f, out) in flows.iter().zip(cube_flows.chunks_mut(2 * area)) {
             let Some(f) = f else { continue };
@@ -222,12 +260,14 @@ pub fn cubes_at(
             let fxr = crop_range(b.x1 * sx, b.x2 * sx, f.width);
             let fyr = crop_range(b.y1 * sy, b.y2 * sy, f.height);
             if let (Some(fxr), Some(fyr)) = (fxr, fyr) {
-                crop_flow(f, (fxr, fyr), patch, [1.0 / sx, 1.0 / sy], out);
+                let scale = [flow_scale[0] / sx, flow_scale[1] / sy];
+                crop_flow(f, (fxr, fyr), patch, scale, out);
             }
         }
         cubes.push(Cube {
             frames: cube_frames,
             flows: cube_flows,
+            flow_scale,
             box_index,
             bbox: *b,
         });
@@ -241,16 +281,14 @@ pub fn scenario_cubes(
     scenario: &Scenario,
     index: usize,
     boxes: &[BoxRecord],
-    clip_hist: usize,
-    patch: usize,
+    geometry: CubeGeometry,
 ) -> Result<Vec<Cube>, ModelError> {
     let root = scenario.root().display().to_string();
     let wrap = |e: crate::sequence::SequenceError| ModelError::Cube(format!("{root}: {e}"));
     cubes_at(
         index,
         boxes,
-        clip_hist,
-        patch,
+        geometry,
         &mut |k| scenario.rgb(k).map_err(wrap),
         &mut |k| scenario.flow(k).map_err(wrap),
     )
@@ -276,6 +314,14 @@ mod tests {
             class: 14,
             score: 1.0,
             anomalous: false,
+        }
+    }
+
+    fn geometry(clip_hist: usize, patch: usize) -> CubeGeometry {
+        CubeGeometry {
+            clip_hist,
+            patch,
+            patch_units: false,
         }
     }
 
@@ -307,9 +353,13 @@ mod tests {
     #[test]
     fn cube_crops_the_last_frames_box_from_every_frame_and_flow() {
         let boxes = [bbox(10.2, 5.0, 42.0, 37.0), bbox(70.0, 0.0, 90.0, 10.0)];
-        let cubes = cubes_at(6, &boxes, 4, 32, &mut |k| Ok(frame(k)), &mut |k| {
-            Ok(Some(flow(k)))
-        })
+        let cubes = cubes_at(
+            6,
+            &boxes,
+            geometry(4, 32),
+            &mut |k| Ok(frame(k)),
+            &mut |k| Ok(Some(flow(k))),
+        )
         .expect("cubes");
         // The second box lies outside the image: no cube.
         assert_eq!(cubes.len(), 1);
@@ -333,13 +383,13 @@ mod tests {
     #[test]
     fn missing_flow_is_zero_at_frame_zero_and_an_error_elsewhere() {
         let boxes = [bbox(0.0, 0.0, 16.0, 16.0)];
-        let cubes = cubes_at(1, &boxes, 4, 8, &mut |k| Ok(frame(k)), &mut |k| {
+        let cubes = cubes_at(1, &boxes, geometry(4, 8), &mut |k| Ok(frame(k)), &mut |k| {
             Ok((k > 0).then(|| flow(k)))
         })
         .expect("cubes");
         assert!(cubes[0].flows[..3 * 2 * 64].iter().all(|&v| v == 0.0));
         assert_eq!(cubes[0].flows[3 * 2 * 64], 1.0);
-        let err = cubes_at(5, &boxes, 4, 8, &mut |k| Ok(frame(k)), &mut |k| {
+        let err = cubes_at(5, &boxes, geometry(4, 8), &mut |k| Ok(frame(k)), &mut |k| {
             Ok((k != 3).then(|| flow(k)))
         })
         .expect_err("missing flow");
@@ -357,14 +407,40 @@ mod tests {
         let cubes = cubes_at(
             4,
             &[bbox(8.0, 8.0, 40.0, 40.0)],
-            4,
-            8,
+            geometry(4, 8),
             &mut |k| Ok(frame(k)),
             &mut |_| Ok(Some(small.clone())),
         )
         .expect("cubes");
         assert_eq!(cubes[0].flows[0], 2.0, "u in frame pixels");
         assert_eq!(cubes[0].flows[64], 4.0, "v in frame pixels");
+        assert_eq!(cubes[0].flow_scale, [1.0, 1.0]);
+    }
+
+    #[test]
+    fn patch_units_divide_the_motion_by_the_box_size() {
+        // A 32×16 box into 8×8 patches: u × 8/32, v × 8/16, on top of the grid rescale.
+        let mut small = FlowField::zeros(32, 24);
+        for px in small.uv.chunks_mut(2) {
+            px[0] = 1.0;
+            px[1] = 2.0;
+        }
+        let small = Arc::new(small);
+        let geometry = CubeGeometry {
+            patch_units: true,
+            ..geometry(4, 8)
+        };
+        let cubes = cubes_at(
+            4,
+            &[bbox(8.0, 8.0, 40.0, 24.0)],
+            geometry,
+            &mut |k| Ok(frame(k)),
+            &mut |_| Ok(Some(small.clone())),
+        )
+        .expect("cubes");
+        assert_eq!(cubes[0].flow_scale, [0.25, 0.5]);
+        assert_eq!(cubes[0].flows[0], 2.0 * 0.25, "u in patch pixels");
+        assert_eq!(cubes[0].flows[64], 4.0 * 0.5, "v in patch pixels");
     }
 
     #[test]

@@ -194,7 +194,7 @@ impl Grouping {
     };
 
     /// The group of a scenario under this grouping (`None` = not split on that key).
-    fn key_of(self, item: &ScenarioScores) -> (Option<Domain>, Option<Weather>) {
+    fn key_of(self, item: &Prepared) -> (Option<Domain>, Option<Weather>) {
         (
             self.domain.then_some(item.domain),
             self.weather.then_some(item.weather),
@@ -220,13 +220,37 @@ fn condition_order(domain: Option<Domain>, weather: Option<Weather>) -> (u8, u8)
     (d, w)
 }
 
-/// One scenario ready for the metrics: its fused, filtered scores and labels, and its
-/// pixel counts when pixels are evaluated.
+/// One scenario ready for the metrics: its fused, filtered scores and labels, its box
+/// agreement, and its pixel counts when pixels are evaluated.
 struct Prepared<'a> {
-    item: &'a ScenarioScores,
+    source: &'a str,
+    domain: Domain,
+    weather: Weather,
     scores: Vec<f64>,
     labels: Vec<bool>,
+    boxes: Option<&'a BoxMatchStats>,
     pixels: Option<&'a PixelRoc>,
+}
+
+/// One scenario's raw frame scores from a scorer other than the model's fusion (a
+/// [`super::Baseline`]), with what evaluation needs to place them in a table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameSeries {
+    /// Scenario name.
+    pub name: String,
+    /// Road environment.
+    pub domain: Domain,
+    /// Weather.
+    pub weather: Weather,
+    /// Row label (rows are grouped by it).
+    pub source: String,
+    /// Per-frame anomaly flags.
+    pub labels: Vec<bool>,
+    /// Raw frame scores, one per frame.
+    pub raw: Vec<f64>,
+    /// Frames dropped at the start unless the options say otherwise (the model's
+    /// `clip_hist`, so baselines and model are measured on the same frames).
+    pub skip_first: usize,
 }
 
 fn group_row(
@@ -255,7 +279,7 @@ fn group_row(
     let mut boxes: Option<BoxMatchStats> = None;
     let mut pixels: Option<PixelRoc> = None;
     for m in members {
-        if let Some(b) = &m.item.boxes {
+        if let Some(b) = m.boxes {
             boxes
                 .get_or_insert_with(|| BoxMatchStats::new(b.iou_threshold))
                 .merge(b);
@@ -330,32 +354,67 @@ pub fn evaluate_table(
                 metric_frames(&raw, &item.labels, skip, options.median_kernel)
                     .map_err(|e| ScoreError::Invalid(format!("{}: {e}", item.name)))?;
             Ok(Prepared {
-                item,
+                source: &item.box_source,
+                domain: item.domain,
+                weather: item.weather,
                 scores,
                 labels,
+                boxes: item.boxes.as_ref(),
                 pixels: pixels.map(|p| &p[k]),
             })
         })
         .collect::<Result<Vec<_>, ScoreError>>()?;
+    grouped_rows(&prepared, grouping)
+}
+
+/// The table of other scorers' frame scores ([`FrameSeries`], e.g. baselines): the rows of
+/// [`evaluate_table`] (a row per source over all its scenarios, then one per group of
+/// `grouping`), filtered and skipped by `options` as the model's scores are.
+pub fn evaluate_series(
+    series: &[FrameSeries],
+    options: &FrameMetricOptions,
+    grouping: Grouping,
+) -> Result<Vec<EvalRow>, ScoreError> {
+    let prepared = series
+        .iter()
+        .map(|item| {
+            let skip = options.skip_first.unwrap_or(item.skip_first);
+            let (scores, labels) =
+                metric_frames(&item.raw, &item.labels, skip, options.median_kernel)
+                    .map_err(|e| ScoreError::Invalid(format!("{}: {e}", item.name)))?;
+            Ok(Prepared {
+                source: &item.source,
+                domain: item.domain,
+                weather: item.weather,
+                scores,
+                labels,
+                boxes: None,
+                pixels: None,
+            })
+        })
+        .collect::<Result<Vec<_>, ScoreError>>()?;
+    grouped_rows(&prepared, grouping)
+}
+
+/// Rows per source (in order of first appearance): one over all its scenarios, then one per
+/// group of `grouping` present.
+fn grouped_rows(prepared: &[Prepared], grouping: Grouping) -> Result<Vec<EvalRow>, ScoreError> {
     let mut sources: Vec<&str> = Vec::new();
-    for item in items {
-        if !sources.contains(&item.box_source.as_str()) {
-            sources.push(&item.box_source);
+    for item in prepared {
+        if !sources.contains(&item.source) {
+            sources.push(item.source);
         }
     }
     let mut rows = Vec::new();
     for source in sources {
-        let members: Vec<&Prepared> = prepared
-            .iter()
-            .filter(|p| p.item.box_source == source)
-            .collect();
+        let members: Vec<&Prepared> = prepared.iter().filter(|p| p.source == source).collect();
         rows.push(group_row(source, (None, None), &members)?);
         if grouping == Grouping::NONE {
             continue;
         }
         let mut conditions: Vec<(Option<Domain>, Option<Weather>)> = Vec::new();
         for m in &members {
-            let key = grouping.key_of(m.item);
+            let key = grouping.key_of(m);
             if !conditions.contains(&key) {
                 conditions.push(key);
             }
@@ -364,7 +423,7 @@ pub fn evaluate_table(
         for condition in conditions {
             let group: Vec<&Prepared> = members
                 .iter()
-                .filter(|m| grouping.key_of(m.item) == condition)
+                .filter(|m| grouping.key_of(m) == condition)
                 .copied()
                 .collect();
             rows.push(group_row(source, condition, &group)?);

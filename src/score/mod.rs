@@ -23,7 +23,11 @@
 //!   metrics, box IoU and recall); [`sweep_weights`] over [`sweep_grid`]: the weight study;
 //!   [`PixelRoc`] + [`add_scenario_pixels`] for pixel-level metrics; [`table`] renders the
 //!   rows as text, Markdown or CSV.
+//! - [`Baseline`] + [`baseline_frame_scores`]: trivial frame scores (flow energy, looming,
+//!   frame difference, the ego's deceleration) on the scored boxes, evaluated beside the
+//!   model by [`evaluate_series`].
 
+pub mod baselines;
 pub mod boxes;
 pub mod cache;
 pub mod detections;
@@ -35,6 +39,7 @@ pub mod motion;
 pub mod run;
 pub mod table;
 
+pub use baselines::{Baseline, baseline_frame_scores};
 pub use boxes::{
     BoxMatch, BoxMatchStats, BoxProvider, BoxSource, box_iou, match_boxes, match_scenario,
 };
@@ -45,8 +50,9 @@ pub use cache::{
 pub use detections::{DetectionFile, DetectionFormat, FrameNumbering};
 pub use error::ScoreError;
 pub use evaluate::{
-    EvalRow, Grouping, PixelRoc, SWEEP_VALUES, ScenarioScores, SweepRow, add_scenario_pixels,
-    add_scenario_pixels_each, evaluate_dataset, evaluate_table, sweep_grid, sweep_weights,
+    EvalRow, FrameSeries, Grouping, PixelRoc, SWEEP_VALUES, ScenarioScores, SweepRow,
+    add_scenario_pixels, add_scenario_pixels_each, evaluate_dataset, evaluate_series,
+    evaluate_table, sweep_grid, sweep_weights,
 };
 pub use flows::{FlowProvider, FlowSource};
 pub use fusion::{

@@ -19,8 +19,8 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::eval::{RobustStats, quantile_linear};
-use crate::model::stc::{Cube, cubes_at};
-use crate::model::{CubeResult, Detector, ModelError, StatsAccumulator, TrainingStats};
+use crate::model::stc::{Cube, CubeGeometry, cubes_at};
+use crate::model::{BoxFilter, CubeResult, Detector, ModelError, StatsAccumulator, TrainingStats};
 use crate::sequence::{BoxRecord, FrameId, Scenario};
 
 use super::ScoreError;
@@ -69,6 +69,10 @@ pub trait CubeScorer {
     fn clip_hist(&self) -> usize;
     /// Training statistics (needed for frame scores).
     fn training_stats(&self) -> Option<TrainingStats>;
+    /// Which boxes the model scores (those it was trained on); the rest are left out.
+    fn box_filter(&self) -> BoxFilter {
+        BoxFilter::KEEP_ALL
+    }
     /// Scores B cubes: `frames` [B, 3(t+1), P, P] in [0, 1], `flows` [B, 2t, P, P].
     fn score(&self, frames: &[f32], flows: &[f32]) -> Result<Vec<CubeResult>, ModelError>;
 }
@@ -82,6 +86,9 @@ impl CubeScorer for Detector {
     }
     fn training_stats(&self) -> Option<TrainingStats> {
         Detector::training_stats(self).copied()
+    }
+    fn box_filter(&self) -> BoxFilter {
+        self.config().box_filter
     }
     fn score(&self, frames: &[f32], flows: &[f32]) -> Result<Vec<CubeResult>, ModelError> {
         self.infer(frames, flows)
@@ -183,19 +190,16 @@ pub fn score_scenario_with(
 pub struct ScenarioCubes<'a> {
     scenario: &'a Scenario,
     flows: FlowProvider<'a>,
-    clip_hist: usize,
-    patch: usize,
+    geometry: CubeGeometry,
 }
 
 impl<'a> ScenarioCubes<'a> {
-    /// Cubes of `clip_hist` + 1 frames and `clip_hist` flows of `patch`×`patch` pixels from
-    /// `scenario`, flows from `flow`.
-    pub fn new(scenario: &'a Scenario, flow: FlowSource, clip_hist: usize, patch: usize) -> Self {
+    /// Cubes of `geometry` from `scenario`, flows from `flow`.
+    pub fn new(scenario: &'a Scenario, flow: FlowSource, geometry: CubeGeometry) -> Self {
         Self {
             scenario,
             flows: FlowProvider::new(scenario, flow),
-            clip_hist,
-            patch,
+            geometry,
         }
     }
 }
@@ -215,8 +219,7 @@ impl CubeSource for ScenarioCubes<'_> {
         let result = cubes_at(
             index,
             boxes,
-            self.clip_hist,
-            self.patch,
+            self.geometry,
             &mut |k| scenario.rgb(k).map_err(|e| keep(e.into())),
             &mut |k| flows.flow(k).map_err(keep),
         );
@@ -243,8 +246,8 @@ pub fn score_scenario(
     progress: &mut dyn FnMut(ScoreProgress),
     cancel: &AtomicBool,
 ) -> Result<ScoreCache, ScoreError> {
-    let config = detector.config();
-    let mut cubes = ScenarioCubes::new(scenario, request.flow, config.clip_hist, config.patch_size);
+    let geometry = CubeGeometry::of(detector.config());
+    let mut cubes = ScenarioCubes::new(scenario, request.flow, geometry);
     score_scenario_with(
         scenario, detector, model, request, &mut cubes, progress, cancel,
     )
@@ -379,7 +382,12 @@ impl Run<'_> {
                     .iter()
                     .map(|&v| (v * 255.0).round().clamp(0.0, 255.0) as u8)
                     .collect(),
-                recon_flow: r.recon_flows[2 * (t - 1) * area..].to_vec(),
+                // Back to native pixels, so the view compares it with the stored flow.
+                recon_flow: r.recon_flows[2 * (t - 1) * area..]
+                    .chunks(area)
+                    .zip(cube.flow_scale)
+                    .flat_map(|(plane, scale)| plane.iter().map(move |v| v / scale))
+                    .collect(),
             };
             self.writer.push_maps(&maps)?;
             self.scenario_pixels
@@ -418,6 +426,7 @@ pub fn run_scoring(
     cancel: &AtomicBool,
 ) -> Result<ScoreCache, ScoreError> {
     let training = scorer.training_stats().ok_or(ScoreError::NoTrainingStats)?;
+    let box_filter = scorer.box_filter();
     let patch = scorer.patch_size();
     let clip_hist = scorer.clip_hist();
     if patch == 0 || clip_hist == 0 {
@@ -448,7 +457,7 @@ pub fn run_scoring(
         if cancel.load(Ordering::Relaxed) {
             return Err(cancelled());
         }
-        let frame_boxes = boxes.boxes(index)?;
+        let frame_boxes = box_filter.apply(boxes.boxes(index)?, plan.frame_size);
         let frame_cubes = if frame_boxes.is_empty() {
             Vec::new()
         } else {

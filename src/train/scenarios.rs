@@ -1,14 +1,17 @@
 //! The library side of `vadscope train`: gather the cubes of normal scenarios and run the
 //! three stages on them.
 //!
-//! Cubes use the ground-truth boxes of each frame (`Scenario::boxes`) and the flows the
-//! scenarios store; frames labelled anomalous and boxes flagged anomalous are left out, so
-//! only normal behaviour is learnt. Each scenario is its own group for the validation split.
+//! Cubes use the ground-truth boxes of each frame (`Scenario::boxes`) that the model's box
+//! filter keeps, and the flows the scenarios store; frames labelled anomalous and boxes
+//! flagged anomalous are left out, so only normal behaviour is learnt. No cube comes from a
+//! frame before `clip_hist`: those cubes would repeat frame 0 and hold the zero flow stored
+//! there, a degenerate input scoring never weighs (its metrics skip those frames). Each
+//! scenario is its own group for the validation split.
 
 use std::path::{Path, PathBuf};
 
-use crate::model::ModelConfig;
-use crate::model::stc::scenario_cubes;
+use crate::model::stc::{CubeGeometry, scenario_cubes};
+use crate::model::{BoxFilter, ModelConfig};
 use crate::sequence::{Scenario, discover_scenarios};
 
 use super::config::TrainConfig;
@@ -19,11 +22,12 @@ use super::stages::{TrainEvent, TrainReport, train, train_from_checkpoint};
 /// How cubes are taken from scenarios.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CubeExtraction {
-    /// Patch side P.
-    pub patch: usize,
-    /// Past frames per cube t.
-    pub clip_hist: usize,
-    /// Use every n-th frame as a cube target (1: all frames).
+    /// Patch side P, history t and flow units of the cubes.
+    pub geometry: CubeGeometry,
+    /// Which boxes give cubes (the model's [`ModelConfig::box_filter`]).
+    pub box_filter: BoxFilter,
+    /// Use every n-th frame as a cube target, counted from frame `clip_hist` (1: all
+    /// frames).
     pub frame_stride: usize,
     /// Leave out frames labelled anomalous and boxes flagged anomalous.
     pub normal_only: bool,
@@ -33,8 +37,8 @@ impl CubeExtraction {
     /// Every frame of every scenario, normal objects only, sized for `config`.
     pub fn for_model(config: &ModelConfig) -> Self {
         Self {
-            patch: config.patch_size,
-            clip_hist: config.clip_hist,
+            geometry: CubeGeometry::of(config),
+            box_filter: config.box_filter,
             frame_stride: 1,
             normal_only: true,
         }
@@ -60,7 +64,8 @@ pub fn cubes_from_scenarios(
     extraction: &CubeExtraction,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<CubeSet, TrainError> {
-    let mut set = CubeSet::new(extraction.patch, extraction.clip_hist);
+    let geometry = extraction.geometry;
+    let mut set = CubeSet::new(geometry.patch, geometry.clip_hist);
     for (group, folder) in folders.iter().enumerate() {
         let scenario = Scenario::open(folder)
             .map_err(|e| TrainError::file(folder, format!("cannot open scenario: {e}")))?;
@@ -77,7 +82,8 @@ fn add_scenario(
     extraction: &CubeExtraction,
 ) -> Result<(), TrainError> {
     let labels = scenario.frame_labels();
-    for index in (0..scenario.len()).step_by(extraction.frame_stride.max(1)) {
+    let first = extraction.geometry.clip_hist;
+    for index in (first..scenario.len()).step_by(extraction.frame_stride.max(1)) {
         if extraction.normal_only && labels.is_anomalous(index) {
             continue;
         }
@@ -87,13 +93,8 @@ fn add_scenario(
             .into_iter()
             .filter(|b| !(extraction.normal_only && b.anomalous))
             .collect();
-        let cubes = scenario_cubes(
-            scenario,
-            index,
-            &boxes,
-            extraction.clip_hist,
-            extraction.patch,
-        )?;
+        let boxes = extraction.box_filter.apply(boxes, scenario.resolution());
+        let cubes = scenario_cubes(scenario, index, &boxes, extraction.geometry)?;
         for cube in cubes {
             set.push(&cube.frames, &cube.flows, group)?;
         }

@@ -409,6 +409,16 @@ struct Context<'a> {
     device: &'a Device,
 }
 
+/// What ML-MemAE-SC learns from in stage 1: the cube's last flow, as the reference, or all
+/// its flows when they are reconstructed jointly.
+fn stage1_input(config: &ModelConfig, flows: Tensor<4>) -> Tensor<4> {
+    if config.joint_flows {
+        flows
+    } else {
+        flows.narrow(1, 2 * (config.num_flows - 1), 2)
+    }
+}
+
 /// A batch as model-ready tensors.
 struct Batch {
     frames: Tensor<4>,
@@ -524,9 +534,9 @@ impl Context<'_> {
         let c = self.model_config;
         match stage {
             1 => {
-                let last = batch.flows.narrow(1, 2 * (c.num_flows - 1), 2);
-                let out = model.memae.forward(last.clone());
-                let loss = stage1_loss(&out, last, w).total;
+                let input = stage1_input(c, batch.flows);
+                let out = model.memae.forward(input.clone());
+                let loss = stage1_loss(&out, input, w).total;
                 let grads = GradientsParams::from_grads(loss.backward(), &model.memae);
                 model.memae = optim.step(lr, model.memae, grads);
                 (model, scalar(loss))
@@ -564,8 +574,8 @@ impl Context<'_> {
         for chunk in self.val_idx.chunks(self.train_config.eval_batch) {
             let batch = self.batch(chunk, &device);
             let loss = if stage == 1 {
-                let last = batch.flows.narrow(1, 2 * (c.num_flows - 1), 2);
-                stage1_loss(&eval.memae.forward(last.clone()), last, w).total
+                let input = stage1_input(c, batch.flows);
+                stage1_loss(&eval.memae.forward(input.clone()), input, w).total
             } else {
                 let target = batch.frames.clone().narrow(1, 3 * c.clip_hist, 3);
                 let out = eval.forward(batch.frames, batch.flows.clone(), &Latents::Mean, None);
