@@ -117,6 +117,8 @@ struct JsonReport<'a> {
     median_kernel: usize,
     grouping: Grouping,
     table2: &'a [EvalRow],
+    /// Per box source: anomaly frames whose top-scoring object is the anomalous one.
+    top_object: &'a [(String, TopObjectHits)],
     #[serde(skip_serializing_if = "Option::is_none")]
     table3: Option<&'a [SweepRow]>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -314,6 +316,18 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
         None
     };
 
+    let mut top_object: Vec<(String, TopObjectHits)> = Vec::new();
+    for (item, s) in items.iter().zip(&scored) {
+        let skip = options
+            .skip_first
+            .unwrap_or(item.table.meta.clip_hist as usize);
+        let hits = top_object_hits(s.scenario, &item.table, &weights, skip)?;
+        match top_object.iter_mut().find(|(k, _)| *k == item.box_source) {
+            Some((_, total)) => total.merge(hits),
+            None => top_object.push((item.box_source.clone(), hits)),
+        }
+    }
+
     let baselines = if args.baselines {
         Some(baseline_rows(
             &scored,
@@ -333,6 +347,7 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
                 median_kernel: args.median,
                 grouping,
                 table2: &rows,
+                top_object: &top_object,
                 table3: sweep.as_deref(),
                 baselines: baselines.as_deref(),
             };
@@ -365,6 +380,19 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
         )),
         render_eval_table(&rows, format)
     );
+    if format != TableFormat::Csv {
+        println!();
+        for (source, hits) in &top_object {
+            if let Some(rate) = hits.rate() {
+                println!(
+                    "{source}: the anomalous object scores highest in {} of {} anomaly frames with scored objects ({:.1} %)",
+                    hits.hits,
+                    hits.frames,
+                    100.0 * rate
+                );
+            }
+        }
+    }
     if let Some(sweep) = &sweep {
         println!();
         print!(

@@ -25,10 +25,10 @@ use crate::eval::{MetricsError, RocCurve, RocPoint, ScoreMetrics, macro_auroc};
 use crate::sequence::{BoxRecord, Domain, Scenario, Weather};
 
 use super::ScoreError;
-use super::boxes::BoxMatchStats;
+use super::boxes::{BoxMatchStats, box_iou};
 use super::cache::{ModelKey, ScoreCache, ScoreTable};
 use super::fusion::{
-    FrameMetricOptions, FusionWeights, Heatmap, HeatmapScratch, PixelReferenceMode,
+    FrameFusion, FrameMetricOptions, FusionWeights, Heatmap, HeatmapScratch, PixelReferenceMode,
     compose_heatmap, frame_scores, metric_frames,
 };
 use super::run::ScoreRequest;
@@ -139,6 +139,73 @@ pub fn scored_box_agreement(
         stats.add_frame(&scenario.boxes(i)?, &scored);
     }
     Ok(stats)
+}
+
+/// How often the object that sets an anomaly frame's score is the anomalous one: the
+/// question an analyst asks first of a detection ("did it fire on the right car?").
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct TopObjectHits {
+    /// Anomaly frames (after the skipped first frames) whose top-scoring object overlaps a
+    /// ground-truth box flagged anomalous (IoU ≥ 0.5, or the same track id).
+    pub hits: usize,
+    /// Anomaly frames (after the skipped first frames) that have scored objects.
+    pub frames: usize,
+}
+
+impl TopObjectHits {
+    /// Adds the counts of `other`.
+    pub fn merge(&mut self, other: TopObjectHits) {
+        self.hits += other.hits;
+        self.frames += other.frames;
+    }
+
+    /// `hits / frames`, `None` without anomaly frames.
+    pub fn rate(&self) -> Option<f64> {
+        (self.frames > 0).then(|| self.hits as f64 / self.frames as f64)
+    }
+}
+
+/// Counts, over the anomaly frames of `scenario` from `skip_first` on, whether the
+/// object with the highest fused score under `weights` is the anomalous one.
+pub fn top_object_hits(
+    scenario: &Scenario,
+    table: &ScoreTable,
+    weights: &FusionWeights,
+    skip_first: usize,
+) -> Result<TopObjectHits, ScoreError> {
+    let fusion = FrameFusion::new(&table.meta.training, weights);
+    let labels = &scenario.frame_labels().flags;
+    let mut out = TopObjectHits::default();
+    for (i, _) in labels
+        .iter()
+        .enumerate()
+        .skip(skip_first)
+        .filter(|(_, &a)| a)
+    {
+        let top = table.frame_objects(i).iter().max_by(|a, b| {
+            fusion
+                .object_score(a.s_r, a.s_p)
+                .total_cmp(&fusion.object_score(b.s_r, b.s_p))
+        });
+        let Some(top) = top else { continue };
+        out.frames += 1;
+        let scored = BoxRecord {
+            frame: table.frames[i].id,
+            track_id: top.track_id,
+            x1: top.bbox[0],
+            y1: top.bbox[1],
+            x2: top.bbox[2],
+            y2: top.bbox[3],
+            class: top.class,
+            score: top.confidence,
+            anomalous: false,
+        };
+        let hit = scenario.boxes(i)?.iter().filter(|b| b.anomalous).any(|b| {
+            (top.track_id != 0 && b.track_id == top.track_id) || box_iou(b, &scored) >= 0.5
+        });
+        out.hits += usize::from(hit);
+    }
+    Ok(out)
 }
 
 /// One row of the evaluation table.

@@ -51,8 +51,8 @@ pub use detections::{DetectionFile, DetectionFormat, FrameNumbering};
 pub use error::ScoreError;
 pub use evaluate::{
     EvalRow, FrameSeries, Grouping, PixelRoc, SWEEP_VALUES, ScenarioScores, SweepRow,
-    add_scenario_pixels, add_scenario_pixels_each, evaluate_dataset, evaluate_series,
-    evaluate_table, sweep_grid, sweep_weights,
+    TopObjectHits, add_scenario_pixels, add_scenario_pixels_each, evaluate_dataset,
+    evaluate_series, evaluate_table, sweep_grid, sweep_weights, top_object_hits,
 };
 pub use flows::{FlowProvider, FlowSource};
 pub use fusion::{
