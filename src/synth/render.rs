@@ -5,26 +5,16 @@
 //! panels, and vehicles made of convex parts and wheels).
 
 use super::camera::Camera;
-use super::math::V3;
-use super::scenario::World;
+use super::keys::{KEY_BACKDROP, KEY_GROUND, KEY_SKY, KEY_STATIC, KEY_VEHICLE};
+use super::math::{Rgb, V3};
 use super::scenery::{Shape, StaticKind, StaticObject};
 use super::texture::value2;
 use super::vehicle::{Convex, MAX_PLANES, Plane, VehicleModel, Wheel};
+use super::world::{BACKDROP_MAX, World};
 use crate::sequence::Domain;
 
 /// Tile size in pixels.
 pub const TILE: usize = 16;
-
-/// Object key of the sky.
-pub const KEY_SKY: u32 = 0;
-/// Object key of the ground.
-pub const KEY_GROUND: u32 = 1;
-/// Object key of the distant backdrop (skyline, hills) at infinity.
-pub const KEY_BACKDROP: u32 = 2;
-/// Offset of static-object keys.
-pub const KEY_STATIC: u32 = 16;
-/// Bit marking vehicle keys (the rest is the vehicle index).
-pub const KEY_VEHICLE: u32 = 0x8000_0000;
 
 /// What a primitive of a frame is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -191,6 +181,17 @@ impl Light {
         // Shading compares a rounded squared distance with the squared range: the margin
         // keeps this test on the safe side of that rounding.
         g.dot(g) <= self.range * self.range * 1.001
+    }
+}
+
+/// The ego's headlights (night), camera-relative.
+pub fn ego_headlight(cam: &Camera) -> Light {
+    Light {
+        pos: V3::new(2.4 * cam.c, 2.4 * cam.s, 0.75),
+        colour: Rgb::new(1.0, 0.95, 0.88) * 300.0,
+        dir: V3::new(cam.c, cam.s, -0.03).normalized(),
+        cos_outer: 0.6,
+        range: 90.0,
     }
 }
 
@@ -572,7 +573,7 @@ impl<'w> FrameView<'w> {
             vehicle_start,
             vehicle_items,
             lights: Vec::new(),
-            ego_headlight: world.ego_headlight(&cam),
+            ego_headlight: ego_headlight(&cam),
             light_start: vec![0; tiles_x * tiles_y + 1],
             light_items: Vec::new(),
             glows: Vec::new(),
@@ -862,25 +863,6 @@ impl<'w> FrameView<'w> {
         }
         let elevation = dir.z / horiz;
         elevation < BACKDROP_MAX && elevation < self.world.backdrop_at(dir.y.atan2(dir.x))
-    }
-}
-
-/// Largest value [`backdrop_height`] returns.
-pub const BACKDROP_MAX: f32 = 0.09;
-
-/// Tangent of the elevation of the distant skyline (city) or hills (highway) at world
-/// azimuth `az`.
-pub fn backdrop_height(domain: Domain, az: f32, salt: u32) -> f32 {
-    match domain {
-        Domain::Highway => {
-            let x = az * 9.0;
-            0.012 + 0.05 * value2(x, 0.5, salt) + 0.02 * value2(x * 3.1, 1.5, salt ^ 7)
-        }
-        _ => {
-            let bin = (az * 60.0).floor();
-            let u = super::rng::unit1(bin as i32, salt);
-            if u < 0.3 { 0.0 } else { 0.01 + 0.07 * u * u }
-        }
     }
 }
 

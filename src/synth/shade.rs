@@ -4,11 +4,10 @@
 //! with contact and sun shadows under vehicles, wet-road sky reflections and haze; plus the
 //! per-frame light and glow lists.
 
+use super::keys::{KEY_BACKDROP, KEY_GROUND, KEY_SKY};
 use super::light_bank::LightBank;
 use super::math::{Rgb, V3, floor, smoothstep, wrap};
-use super::render::{
-    FrameView, Glow, Hit, KEY_BACKDROP, KEY_GROUND, KEY_SKY, Light, PrimRef, WHEEL_PART,
-};
+use super::render::{FrameView, Glow, Hit, Light, PrimRef, WHEEL_PART};
 use super::rng::unit2;
 use super::road::{GroundRegion, LightState};
 use super::scenery::{Shape, StaticKind, WALL_PALETTE};
