@@ -103,8 +103,10 @@ fn cross_traffic_lanes(
 /// comes near in `first` (the simulation without the stream), this adds vehicles far down
 /// both of its cross streets, each placed from its own desired speed so that it reaches the
 /// intersection while the ego is near (one every [`CROSS_HEADWAY_S`] seconds, what the
-/// cross street's short green lets through). Beyond [`CROSS_STREET_END`](super::CROSS_STREET_END) they are neither
+/// cross street's short green lets through). Beyond [`CROSS_STREET_END`] they are neither
 /// drawn nor checked for collisions, so they appear down the street as they approach.
+///
+/// [`CROSS_STREET_END`]: super::CROSS_STREET_END
 pub(super) fn cross_stream(
     spec: &ScenarioSpec,
     road: &Road,

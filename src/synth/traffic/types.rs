@@ -76,9 +76,11 @@ pub struct VehicleState {
     pub brake_lights: bool,
     /// Whether the vehicle is emergency braking (brake onset to standstill).
     pub emergency: bool,
-    /// Whether the vehicle is on a cross street beyond its end ([`CROSS_STREET_END`](super::CROSS_STREET_END) from
+    /// Whether the vehicle is on a cross street beyond its end ([`CROSS_STREET_END`] from
     /// the main road, less on the inner side of a bend): it has driven off it, or (streamed
     /// cross traffic) has yet to arrive. It is neither drawn nor checked for collisions.
+    ///
+    /// [`CROSS_STREET_END`]: super::CROSS_STREET_END
     pub beyond_street_end: bool,
 }
 
