@@ -105,7 +105,7 @@ pub struct Glow {
 }
 
 /// The ego's headlights (night), camera-relative.
-pub fn ego_headlight(cam: &Camera) -> Light {
+pub(super) fn ego_headlight(cam: &Camera) -> Light {
     Light {
         pos: V3::new(2.4 * cam.c, 2.4 * cam.s, 0.75),
         colour: Rgb::new(1.0, 0.95, 0.88) * 300.0,
@@ -117,7 +117,7 @@ pub fn ego_headlight(cam: &Camera) -> Light {
 
 /// The street lamps, headlights and glow sources of frame `frame`, seen from `cam` at arc
 /// length `cam_s`, whose primitives are `prims`.
-pub fn place_lights(
+pub(super) fn place_lights(
     world: &World,
     frame: usize,
     cam: &Camera,
