@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use super::layout::CONFIG_FOLDER;
-use super::validate::FileProblem;
+use super::problem::FileProblem;
 use super::{FrameId, Modality, SequenceError};
 
 /// Which AnoVox convention a scenario's folders follow.

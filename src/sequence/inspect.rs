@@ -11,8 +11,9 @@ use serde::Serialize;
 use super::discovery::{LayoutKind, discover_scenarios};
 use super::index::FrameRun;
 use super::labels::{LabelSource, join_runs};
+use super::problem::FileProblem;
 use super::scenario::{BoxSource, Scenario};
-use super::validate::{FileProblem, ValidationReport};
+use super::validate::ValidationReport;
 use super::{AnomalyType, Domain, FrameId, Modality, SequenceError, Weather};
 
 /// Boxes per frame over a scenario.

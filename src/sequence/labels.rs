@@ -11,8 +11,8 @@ use super::images::read_semantic;
 use super::index::FrameRun;
 use super::keyvalue::read_key_values;
 use super::layout::FRAME_LABELS_FILE;
+use super::problem::FileProblem;
 use super::scenario::Scenario;
-use super::validate::FileProblem;
 use super::{AnomalyType, FrameId, Modality, SequenceError, palette};
 
 /// The header of `frame_labels.csv`.

@@ -25,8 +25,8 @@ use super::layout::{BOXES_FILE, DETECTIONS_FILE, SCENARIO_JSON_FILE};
 use super::meta::{
     find_anovox_config, merge_anovox_config, read_scenario_json, read_sensor_setup_camera,
 };
+use super::problem::FileProblem;
 use super::vadscope_dir::{resolve_cache_dir, user_cache_base};
-use super::validate::FileProblem;
 use super::{
     BoxRecord, CameraIntrinsics, FlowField, FrameId, KeyValues, Modality, ScenarioMeta,
     SequenceError, palette,

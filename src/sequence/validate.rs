@@ -18,38 +18,9 @@ use super::index::{FrameRun, IdGap};
 use super::keyvalue::read_key_values;
 use super::labels::{join_runs, read_frame_labels};
 use super::layout::{BOXES_FILE, DETECTIONS_FILE, FRAME_LABELS_FILE};
+use super::problem::FileProblem;
 use super::scenario::Scenario;
 use super::{FrameId, Modality, SequenceError};
-
-/// A file and what is wrong with it.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
-pub struct FileProblem {
-    /// The file (or folder).
-    pub path: PathBuf,
-    /// The problem, in words.
-    pub problem: String,
-}
-
-impl FileProblem {
-    /// A problem with `path`.
-    pub fn new(path: &Path, problem: impl Into<String>) -> Self {
-        Self {
-            path: path.to_path_buf(),
-            problem: problem.into(),
-        }
-    }
-
-    /// The file and problem of an error.
-    pub fn from_error(error: &SequenceError) -> Self {
-        Self::new(error.path(), error.problem())
-    }
-}
-
-impl std::fmt::Display for FileProblem {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}: {}", self.path.display(), self.problem)
-    }
-}
 
 /// How completely one modality covers the scenario's frames.
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -8,10 +8,11 @@
 
 use rayon::prelude::*;
 
-use super::frame::GBuffer;
+use super::gbuffer::GBuffer;
+use super::keys::{KEY_BACKDROP, KEY_SKY, KEY_VEHICLE};
 use super::math::V3;
-use super::render::{FrameView, KEY_BACKDROP, KEY_SKY, KEY_VEHICLE};
-use super::scenario::World;
+use super::render::FrameView;
+use super::world::World;
 use crate::sequence::FlowField;
 
 /// Relative depth tolerance of the occlusion test.

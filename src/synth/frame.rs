@@ -5,33 +5,17 @@
 
 use rayon::prelude::*;
 
+use super::gbuffer::GBuffer;
+use super::keys::{KEY_BACKDROP, KEY_GROUND, KEY_SKY, KEY_VEHICLE};
 use super::light_bank::LightBank;
 use super::math::{Rgb, V3};
-use super::render::{
-    FrameView, GroundHint, Hit, KEY_BACKDROP, KEY_GROUND, KEY_SKY, KEY_VEHICLE, TILE,
-};
-use super::scenario::World;
+use super::render::{FrameView, GroundHint, Hit, TILE};
+use super::world::World;
 use super::{flow, labels, post, shade};
 use crate::sequence::{FrameId, FrameRecord};
 
 /// Depth written for sky and backdrop pixels (CARLA's far plane).
 pub const FAR_DEPTH_M: f32 = 1000.0;
-
-/// Per-pixel geometry of a frame, kept for the next frame's flow.
-#[derive(Debug, Clone)]
-pub struct GBuffer {
-    /// Width.
-    pub width: usize,
-    /// Height.
-    pub height: usize,
-    /// Object key per pixel.
-    pub key: Vec<u32>,
-    /// Depth along the optical axis (infinite for sky and backdrop).
-    pub depth: Vec<f32>,
-    /// Surface point: vehicle-local for vehicles, world for everything static, the ray
-    /// direction for sky and backdrop.
-    pub point: Vec<V3>,
-}
 
 /// Shaded output of a frame before post-processing.
 pub struct Shading {

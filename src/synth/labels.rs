@@ -2,9 +2,9 @@
 //! and ANOMALY (lead vehicle, sudden-braking scenarios only) key-value records in AnoVox's
 //! key set (speeds in km/h, values as Python reprs).
 
-use super::render::KEY_VEHICLE;
-use super::scenario::World;
+use super::keys::KEY_VEHICLE;
 use super::traffic::{EGO, LEAD, Vehicle, VehicleState};
+use super::world::World;
 use crate::sequence::{BoxRecord, FrameId, KeyValues};
 
 /// Tight boxes (x2/y2 exclusive) of every vehicle visible in the frame, sorted by track id.

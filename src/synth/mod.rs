@@ -46,7 +46,9 @@ mod camera;
 mod error;
 mod flow;
 mod frame;
+mod gbuffer;
 mod heap_policy;
+mod keys;
 mod labels;
 mod light_bank;
 mod lighting;
@@ -62,6 +64,7 @@ mod spec;
 mod texture;
 mod traffic;
 mod vehicle;
+mod world;
 
 pub use error::SynthError;
 pub use heap_policy::keep_freed_frame_buffers;

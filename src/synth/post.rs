@@ -5,11 +5,12 @@ use std::sync::OnceLock;
 
 use rayon::prelude::*;
 
-use super::frame::GBuffer;
+use super::gbuffer::GBuffer;
+use super::keys::KEY_GROUND;
 use super::math::Rgb;
 use super::render::FrameView;
 use super::rng::Rng;
-use super::scenario::World;
+use super::world::World;
 use crate::sequence::Weather;
 
 /// Linear → sRGB 8-bit lookup over [0, 1] in 4096 steps.
@@ -68,7 +69,7 @@ fn add_glows(world: &World, view: &FrameView, gbuf: &GBuffer, hdr: &mut [Rgb]) {
             if cx < 0 || cy < 0 || cx >= w || cy >= h {
                 continue;
             }
-            if gbuf.key[(cy * w + cx) as usize] != super::render::KEY_GROUND {
+            if gbuf.key[(cy * w + cx) as usize] != KEY_GROUND {
                 continue;
             }
             let sigma = (g.size * view.cam.fx / q.z * 0.6).max(0.8);

@@ -9,16 +9,15 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 
 use super::SynthError;
-use super::camera::Camera;
-use super::frame::{GBuffer, geometry, render_record};
+use super::frame::{geometry, render_record};
+use super::gbuffer::GBuffer;
 use super::lighting::Lighting;
-use super::math::{Rgb, V3};
-use super::render::Light;
 use super::rng::Rng;
 use super::road::Road;
 use super::scenery::Scenery;
 use super::spec::{ScenarioKind, ScenarioSpec};
 use super::traffic::{AnomalyWindow, FRAME_DT, Traffic, simulate};
+use super::world::{BACKDROP_SAMPLES, World, backdrop_height};
 use crate::sequence::discovery::scan_scenario;
 use crate::sequence::layout::SCENARIO_JSON_FILE;
 use crate::sequence::meta::read_scenario_json;
@@ -29,60 +28,6 @@ use crate::sequence::{
 
 /// Generator name and version recorded in `scenario.json`.
 pub const GENERATOR_NAME: &str = concat!("vadscope-synth ", env!("CARGO_PKG_VERSION"));
-
-/// Everything a frame is rendered from.
-pub struct World {
-    /// The spec it was built from.
-    pub spec: ScenarioSpec,
-    /// Camera intrinsics.
-    pub intrinsics: CameraIntrinsics,
-    /// Road.
-    pub road: Road,
-    /// Static objects.
-    pub scenery: Scenery,
-    /// Simulated traffic.
-    pub traffic: Traffic,
-    /// Condition.
-    pub lighting: Lighting,
-    /// Texture salts.
-    pub ground_salt: u32,
-    /// Cloud texture salt.
-    pub cloud_salt: u32,
-    /// Skyline / hills elevation (tangent) over azimuth, [`BACKDROP_SAMPLES`] samples over
-    /// [-π, π).
-    pub backdrop: Vec<f32>,
-    /// Label the lead as agent car (114) / anomaly (100), as AnoVox does in sudden-braking
-    /// scenarios.
-    pub labels_lead_as_agent: bool,
-}
-
-/// Azimuth samples of the backdrop table.
-pub const BACKDROP_SAMPLES: usize = 4096;
-
-impl World {
-    /// Backdrop elevation (tangent) at world azimuth `az` (radians), linearly interpolated.
-    #[inline]
-    pub fn backdrop_at(&self, az: f32) -> f32 {
-        let n = BACKDROP_SAMPLES as f32;
-        let x = (az + std::f32::consts::PI) / std::f32::consts::TAU * n;
-        let i = (x.max(0.0) as usize) % BACKDROP_SAMPLES;
-        let f = (x - i as f32).clamp(0.0, 1.0);
-        let a = self.backdrop[i];
-        let b = self.backdrop[(i + 1) % BACKDROP_SAMPLES];
-        a + (b - a) * f
-    }
-
-    /// The ego's headlights (night), camera-relative.
-    pub fn ego_headlight(&self, cam: &Camera) -> Light {
-        Light {
-            pos: V3::new(2.4 * cam.c, 2.4 * cam.s, 0.75),
-            colour: Rgb::new(1.0, 0.95, 0.88) * 300.0,
-            dir: V3::new(cam.c, cam.s, -0.03).normalized(),
-            cos_outer: 0.6,
-            range: 90.0,
-        }
-    }
-}
 
 /// A built scenario: simulated and ready to render any frame.
 pub struct Scenario {
@@ -139,7 +84,7 @@ impl Scenario {
                         .map(|i| {
                             let az = -std::f32::consts::PI
                                 + std::f32::consts::TAU * i as f32 / BACKDROP_SAMPLES as f32;
-                            super::render::backdrop_height(spec.domain, az, salt)
+                            backdrop_height(spec.domain, az, salt)
                         })
                         .collect()
                 },

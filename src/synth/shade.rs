@@ -1,14 +1,12 @@
 //! Materials and lighting: procedural textures of road, sidewalks, terrain, buildings,
 //! street furniture, vegetation and vehicles (paint, glass, lights, wheels), evaluated at the
 //! hit point in world or object coordinates, lit by sun, sky, street lamps and headlights,
-//! with contact and sun shadows under vehicles, wet-road sky reflections and haze; plus the
-//! per-frame light and glow lists.
+//! with contact and sun shadows under vehicles, wet-road sky reflections and haze.
 
+use super::keys::{KEY_BACKDROP, KEY_GROUND, KEY_SKY};
 use super::light_bank::LightBank;
 use super::math::{Rgb, V3, floor, smoothstep, wrap};
-use super::render::{
-    FrameView, Glow, Hit, KEY_BACKDROP, KEY_GROUND, KEY_SKY, Light, PrimRef, WHEEL_PART,
-};
+use super::render::{FrameView, Hit, PrimRef, WHEEL_PART, lamp_of};
 use super::rng::unit2;
 use super::road::{GroundRegion, LightState};
 use super::scenery::{Shape, StaticKind, WALL_PALETTE};
@@ -103,122 +101,6 @@ pub fn sky(view: &FrameView, d: V3) -> Rgb {
         c = c.lerp(cloud, cover * smoothstep(0.0, 0.12, dn.z));
     }
     c
-}
-
-/// Places street lamps, headlights and glow sources of a frame.
-pub fn place_lights(view: &mut FrameView) {
-    let world = view.world;
-    let l = &world.lighting;
-    let states = &world.traffic.states[view.frame];
-    let cam = view.cam;
-    let mut lights = Vec::new();
-    let mut glows = Vec::new();
-    if l.night {
-        let lamps = &world.scenery.lamps;
-        let lo = lamps.partition_point(|m| m.s < view.cam_s - 40.0);
-        for lamp in lamps[lo..].iter().take_while(|m| m.s < view.cam_s + 300.0) {
-            let pos = cam.relative(lamp.pos);
-            lights.push(Light {
-                pos,
-                colour: Rgb::new(1.0, 0.72, 0.42) * 26.0,
-                dir: V3::new(0.0, 0.0, -1.0),
-                cos_outer: 0.2,
-                range: 20.0,
-            });
-            glows.push(Glow {
-                pos,
-                colour: Rgb::new(1.0, 0.75, 0.45) * 2.5,
-                size: 0.5,
-            });
-        }
-    }
-    for prim in &view.prims {
-        let PrimRef::Vehicle(i) = prim.what else {
-            continue;
-        };
-        let v = &world.traffic.vehicles[i as usize];
-        let st = &states[i as usize];
-        let m = &v.model;
-        let parked = v.role == Role::Parked;
-        let lamp_y = 0.5 * (m.tail.y0 + m.tail.y1);
-        let lamp_z = 0.5 * (m.tail.z0 + m.tail.z1);
-        // Lamps only glow towards the side they face.
-        let facing_camera = prim.c * prim.origin.x + prim.s * prim.origin.y < 0.0;
-        if !parked && !facing_camera && (l.night || st.brake_lights) {
-            let strength = if st.brake_lights { 1.6 } else { 0.5 };
-            for side in [-1.0f32, 1.0] {
-                let p = prim.origin
-                    + V3::new(m.rear_x - 0.02, side * lamp_y, lamp_z).rotate_z(prim.c, prim.s);
-                glows.push(Glow {
-                    pos: p,
-                    colour: Rgb::new(1.0, 0.06, 0.03) * strength,
-                    size: 0.25,
-                });
-            }
-        }
-        if l.night && !parked {
-            let hy = 0.5 * (m.head.y0 + m.head.y1);
-            let hz = 0.5 * (m.head.z0 + m.head.z1);
-            // Only nearby headlights light up the scene noticeably.
-            if prim.origin.x * prim.origin.x + prim.origin.y * prim.origin.y < 70.0 * 70.0 {
-                let fwd = V3::new(prim.c, prim.s, -0.06).normalized();
-                let front =
-                    prim.origin + V3::new(m.front_x + 0.3, 0.0, hz).rotate_z(prim.c, prim.s);
-                lights.push(Light {
-                    pos: front,
-                    colour: Rgb::new(1.0, 0.95, 0.85) * 220.0,
-                    dir: fwd,
-                    cos_outer: 0.86,
-                    range: 35.0,
-                });
-            }
-            for side in [-1.0f32, 1.0] {
-                if !facing_camera {
-                    continue;
-                }
-                let p =
-                    prim.origin + V3::new(m.front_x + 0.02, side * hy, hz).rotate_z(prim.c, prim.s);
-                glows.push(Glow {
-                    pos: p,
-                    colour: Rgb::new(1.0, 0.95, 0.85) * 5.0,
-                    size: 0.3,
-                });
-            }
-        }
-    }
-    // Active traffic-light lamps glow.
-    for prim in &view.prims {
-        let PrimRef::Static(i) = prim.what else {
-            continue;
-        };
-        let obj = &world.scenery.objects[i as usize];
-        if let StaticKind::TrafficLight { intersection } = obj.kind
-            && let Shape::Box { hx, z0, .. } = obj.shape
-        {
-            let state = world.traffic.lights[view.frame]
-                .get(intersection as usize)
-                .copied()
-                .unwrap_or(LightState::Green);
-            let (z, colour) = lamp_of(state, z0);
-            let p = prim.origin + V3::new(-hx - 0.02, 0.0, z).rotate_z(prim.c, prim.s);
-            glows.push(Glow {
-                pos: p,
-                colour: colour * if l.night { 1.5 } else { 0.4 },
-                size: 0.22,
-            });
-        }
-    }
-    view.lights = lights;
-    view.glows = glows;
-}
-
-/// Height and colour of the lit lamp of a traffic-light housing whose bottom is at `z0`.
-fn lamp_of(state: LightState, z0: f32) -> (f32, Rgb) {
-    match state {
-        LightState::Red => (z0 + 0.88, Rgb::new(1.0, 0.04, 0.02)),
-        LightState::Yellow => (z0 + 0.55, Rgb::new(1.0, 0.5, 0.02)),
-        LightState::Green => (z0 + 0.22, Rgb::new(0.05, 1.0, 0.45)),
-    }
 }
 
 #[inline]
