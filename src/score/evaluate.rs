@@ -180,7 +180,7 @@ pub fn top_object_hits(
         .iter()
         .enumerate()
         .skip(skip_first)
-        .filter(|(_, &a)| a)
+        .filter(|(_, a)| **a)
     {
         let top = table.frame_objects(i).iter().max_by(|a, b| {
             fusion
