@@ -13,8 +13,9 @@ use serde::Serialize;
 use vadscope::score::{
     Baseline, BoxSource, EvalRow, FlowProvider, FlowSource, FrameMetricOptions, FrameSeries,
     FusionWeights, Grouping, PixelReferenceMode, PixelRoc, ScenarioScores, ScoreCache, SweepRow,
-    TableFormat, add_scenario_pixels_each, baseline_frame_scores, evaluate_series, evaluate_table,
-    render_eval_table, render_sweep_table, sweep_grid, sweep_weights,
+    TableFormat, TopObjectHits, add_scenario_pixels_each, baseline_frame_scores, evaluate_series,
+    evaluate_table, render_eval_table, render_sweep_table, sweep_grid, sweep_weights,
+    top_object_hits,
 };
 use vadscope::sequence::Scenario;
 
