@@ -28,15 +28,19 @@ impl LaneChange {
     }
 }
 
-/// Where a vehicle is in an emergency stop.
+/// Scripted braking a vehicle is in.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) enum Emergency {
     /// Driving normally.
     None,
-    /// Braking at the scripted deceleration until standstill.
+    /// Full brake (the sudden braking of the lead): the scripted deceleration, then held
+    /// at standstill, until the script releases it.
     Braking,
-    /// Standing still after the stop until time `until` (s).
-    Holding { until: f32 },
+    /// Gentle braking of normal driving at `decel` m/s², until the script releases it.
+    Slowing {
+        /// Deceleration (m/s²).
+        decel: f32,
+    },
 }
 
 /// Per-vehicle dynamic state during the simulation.
@@ -52,10 +56,8 @@ pub(super) struct Dyn {
     pub(super) lane_change: Option<LaneChange>,
     /// Yellow-light decision: (intersection, stop?).
     pub(super) yellow: Option<(usize, bool)>,
-    /// Emergency phase.
+    /// Scripted braking phase.
     pub(super) phase: Emergency,
-    /// Frame whose snapshot first shows the emergency stop completed.
-    pub(super) stop_frame: Option<i64>,
     /// Whether the brake lights are on (they go off with some hysteresis).
     pub(super) brake_lights: bool,
 }

@@ -4,9 +4,11 @@
 //! street, or a lane of a cross street) and controls its speed with the Intelligent Driver
 //! Model (Treiber et al., in its IDM+ form): free-road acceleration towards its desired speed, braking for its
 //! leader (the nearest vehicle ahead that overlaps it laterally) and for red traffic lights.
-//! Normal braking is limited to [`NORMAL_DECEL_LIMIT`]. Scripted events (sudden braking of
-//! the lead, a lane change out of or into the ego lane) are triggered inside the simulation
-//! when their preconditions hold. The simulation runs at 20 Hz and records every vehicle at
+//! Normal braking is limited to [`NORMAL_DECEL_LIMIT`]. In sudden-braking scenarios, and in
+//! half of the normal ones, the ego instead follows its lead with AnoVox's car-following
+//! rule (`follow`), close behind it. Scripted events (sudden braking of the lead, its gentle
+//! braking in normal driving, a lane change out of or into the ego lane) are triggered
+//! inside the simulation when their preconditions hold. The simulation runs at 20 Hz and records every vehicle at
 //! the 10 Hz frame times. A long city recording is simulated twice: the first run tells
 //! when the ego comes near each intersection, the second adds cross traffic that arrives
 //! there at that time ([`cross::cross_stream`]).
@@ -16,7 +18,8 @@
 //! traffic, parked cars), `cross` (city cross traffic), `fleet` (track ids, bodies,
 //! drivers), `check` (collisions, deceleration bounds, the event seen), `sim` (the 20 Hz
 //! integration and the recorded states), `snapshot` (poses, leaders, stop lines at one
-//! instant), `script` (scripted events), `types` (the public data), `route` (routes, poses,
+//! instant), `follow` (AnoVox's car-following rule), `script` (scripted events), `types`
+//! (the public data), `route` (routes, poses,
 //! turn and cross-street geometry), `dynamics` (the per-vehicle state being stepped), `idm`
 //! (the driver model and deceleration limits).
 
@@ -24,6 +27,7 @@ mod check;
 mod cross;
 mod dynamics;
 mod fleet;
+mod follow;
 mod idm;
 mod populate;
 mod route;

@@ -5,6 +5,7 @@
 
 use super::cross::add_cross_traffic;
 use super::fleet::{Fleet, idm_for, pick_body, pick_car};
+use super::follow::MAX_SPEED;
 use super::idm::EGO_EMERGENCY_DECEL;
 use super::route::{Route, STOP_LINE_EXTRA, TURN_RADIUS};
 use super::script::Script;
@@ -14,6 +15,10 @@ use crate::synth::rng::Rng;
 use crate::synth::road::Road;
 use crate::synth::spec::{ScenarioKind, ScenarioSpec};
 use crate::synth::vehicle::{BodyType, VehicleModel};
+
+/// Spacing (m) of the route waypoints AnoVox counts the lead's start distance in (CARLA's
+/// route planner samples every 2 m).
+const WAYPOINT_SPACING: f32 = 2.0;
 
 /// The latest recorded frame from which a cut-in may start (30 % into a 200-frame
 /// scenario, as in shorter ones).
@@ -51,13 +56,21 @@ pub(super) fn populate(
     let mut fleet = Fleet {
         vehicles: Vec::new(),
     };
-    let ego = add_ego(&mut fleet, spec, road, rng);
-    let lead = add_lead(&mut fleet, spec, road, rng, &ego);
+    // AnoVox's ego follows its lead closely; normal driving does so half of the time, so
+    // that a model learns close following without the anomaly.
+    let ego_follows = match spec.kind {
+        ScenarioKind::Braking => true,
+        ScenarioKind::Normal => rng.chance(0.5),
+        ScenarioKind::Turning | ScenarioKind::CutIn => false,
+    };
+    let ego = add_ego(&mut fleet, spec, road, rng, ego_follows);
+    let lead = add_lead(&mut fleet, spec, road, rng, &ego, ego_follows);
     let mut script = Script {
         kind: spec.kind,
         brake_frame: None,
         brake_decel: rng.range(7.6, 9.0),
-        hold_s: rng.range(2.0, 3.5),
+        gentle_brake: None,
+        ego_follows,
         trigger_from: 0,
         target_d: ego.d,
         cut_in: None,
@@ -90,8 +103,15 @@ pub(super) fn populate(
     (fleet.vehicles, script)
 }
 
-/// Adds the ego in its lane at progress 0.
-fn add_ego(fleet: &mut Fleet, spec: &ScenarioSpec, road: &Road, rng: &mut Rng) -> Ego {
+/// Adds the ego in its lane at progress 0 (free to reach AnoVox's 70 km/h when it
+/// follows its lead by AnoVox's rule).
+fn add_ego(
+    fleet: &mut Fleet,
+    spec: &ScenarioSpec,
+    road: &Road,
+    rng: &mut Rng,
+    follows: bool,
+) -> Ego {
     let domain = spec.domain;
     let kind = spec.kind;
     let highway = matches!(domain, Domain::Highway);
@@ -121,6 +141,9 @@ fn add_ego(fleet: &mut Fleet, spec: &ScenarioSpec, road: &Road, rng: &mut Rng) -
     if kind == ScenarioKind::Braking {
         ego_idm.b_max = EGO_EMERGENCY_DECEL;
     }
+    if follows {
+        ego_idm.v0 = MAX_SPEED;
+    }
     fleet.add(Role::Ego, ego_model, lane(ego_d), 0.0, ego_idm);
     Ego {
         lane: ego_lane,
@@ -132,8 +155,16 @@ fn add_ego(fleet: &mut Fleet, spec: &ScenarioSpec, road: &Road, rng: &mut Rng) -
 
 /// Adds the lead, directly ahead of the ego in its lane (in a city turning scenario, on a
 /// route that turns right at the first intersection it reaches a few seconds into the
-/// recording).
-fn add_lead(fleet: &mut Fleet, spec: &ScenarioSpec, road: &Road, rng: &mut Rng, ego: &Ego) -> Lead {
+/// recording). A lead the ego follows by AnoVox's rule starts 7–12 route waypoints of 2 m
+/// ahead, centre to centre, and is no faster than the ego may drive.
+fn add_lead(
+    fleet: &mut Fleet,
+    spec: &ScenarioSpec,
+    road: &Road,
+    rng: &mut Rng,
+    ego: &Ego,
+    followed: bool,
+) -> Lead {
     let domain = spec.domain;
     let kind = spec.kind;
     let highway = matches!(domain, Domain::Highway);
@@ -146,11 +177,20 @@ fn add_lead(fleet: &mut Fleet, spec: &ScenarioSpec, road: &Road, rng: &mut Rng, 
         ScenarioKind::CutIn => ego.v0 + rng.range(1.5, 2.5),
         _ => ego.v0 - rng.range(0.5, 2.0),
     };
-    let lead_gap = match kind {
-        ScenarioKind::CutIn => rng.range(45.0, 60.0),
-        _ => 2.5 + lead_v0 * rng.range(1.1, 1.4),
+    let lead_v0 = if followed {
+        lead_v0.min(rng.range(MAX_SPEED - 3.0, MAX_SPEED - 1.0))
+    } else {
+        lead_v0
     };
-    let lead_s = 0.5 * ego.length + lead_gap + 0.5 * lead_model.length;
+    let lead_s = if followed {
+        WAYPOINT_SPACING * rng.range(7.0, 12.0)
+    } else {
+        let lead_gap = match kind {
+            ScenarioKind::CutIn => rng.range(45.0, 60.0),
+            _ => 2.5 + lead_v0 * rng.range(1.1, 1.4),
+        };
+        0.5 * ego.length + lead_gap + 0.5 * lead_model.length
+    };
     let lead_route = if kind == ScenarioKind::Turning && !highway {
         // The first intersection the lead reaches a few seconds into the recording.
         let min_s = lead_s + lead_v0 * (WARMUP_FRAMES as f32 * FRAME_DT + 2.0);
@@ -199,6 +239,15 @@ fn stage_event(
             for x in &mut road.intersections {
                 x.force_main_green(-(WARMUP_FRAMES as f32) * FRAME_DT, t_on + 14.0);
             }
+        }
+        ScenarioKind::Normal if frames >= 40 && rng.chance(0.5) => {
+            // The lead slows down for a moment, within normal braking.
+            let from = rng.range(0.15, 0.75) * frames as f32;
+            script.gentle_brake = Some((
+                from as i64,
+                10 + rng.below(21) as i64,
+                rng.range(1.5, 2.8),
+            ));
         }
         ScenarioKind::Turning if !highway => {
             // Keep the lead moving towards its turn.

@@ -1,6 +1,7 @@
-//! Scripted events: the sudden braking of the lead, its lane change out of the ego lane
-//! (turning on the highway) and the cut-in, each triggered inside the simulation when its
-//! preconditions hold.
+//! Scripted events: the sudden braking of the lead (full brake for 30 frames, then it
+//! drives on, as AnoVox's `BREAKING_START`/`BREAKING_STOP`), the gentle braking of a lead
+//! in normal driving, its lane change out of the ego lane (turning on the highway) and the
+//! cut-in, each triggered inside the simulation when its preconditions hold.
 
 use super::dynamics::{Dyn, Emergency, LaneChange};
 use super::route::{Pose, Route};
@@ -11,12 +12,16 @@ use crate::synth::spec::ScenarioKind;
 #[derive(Debug, Clone)]
 pub(super) struct Script {
     pub(super) kind: ScenarioKind,
-    /// Braking: frame of brake onset.
+    /// Braking: frame of brake onset; the lead brakes fully for [`BRAKE_FRAMES`] frames.
     pub(super) brake_frame: Option<i64>,
     /// Emergency deceleration of the lead (m/s²).
     pub(super) brake_decel: f32,
-    /// Standstill hold time after emergency braking (s).
-    pub(super) hold_s: f32,
+    /// Normal driving: the lead slows down gently from frame `.0` for `.1` frames at
+    /// `.2` m/s².
+    pub(super) gentle_brake: Option<(i64, i64, f32)>,
+    /// The ego follows its lead with AnoVox's car-following rule ([`super::follow`])
+    /// instead of the Intelligent Driver Model.
+    pub(super) ego_follows: bool,
     /// Earliest frame of the lane change (turning on the highway, cut-in).
     pub(super) trigger_from: i64,
     /// Lane the lead or the cut-in vehicle moves to.
@@ -26,7 +31,11 @@ pub(super) struct Script {
     pub(super) triggered: bool,
 }
 
-/// Applies scripted events that start at `frame`.
+/// Frames of full braking: AnoVox brakes for ticks 140 ≤ t < 170 and labels the lead
+/// anomalous for 140 ≤ t ≤ 170, 31 frames.
+pub const BRAKE_FRAMES: i64 = 30;
+
+/// Applies scripted events that start or end at `frame`.
 pub(super) fn apply_script(
     script: &mut Script,
     frame: i64,
@@ -34,6 +43,20 @@ pub(super) fn apply_script(
     dyns: &mut [Dyn],
     poses: &[Pose],
 ) {
+    // Braking phases end by the script, whatever else happens.
+    let release = match (script.brake_frame, script.gentle_brake) {
+        (Some(f), _) => Some(f + BRAKE_FRAMES),
+        (None, Some((f, n, _))) => Some(f + n),
+        _ => None,
+    };
+    if release == Some(frame) {
+        dyns[LEAD].phase = Emergency::None;
+    }
+    if let Some((f, _, decel)) = script.gentle_brake
+        && f == frame
+    {
+        dyns[LEAD].phase = Emergency::Slowing { decel };
+    }
     if script.triggered {
         return;
     }

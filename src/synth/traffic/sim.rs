@@ -4,10 +4,11 @@
 
 use super::dynamics::{Dyn, Emergency};
 use super::route::{Pose, Route, TURN_RADIUS, cross_street_end, pose_of};
-use super::script::{Script, apply_script};
+use super::follow::follow_accel;
+use super::script::{BRAKE_FRAMES, Script, apply_script};
 use super::snapshot::{Snapshot, box_occupancy, next_stop_line};
 use super::types::{
-    AnomalyWindow, EGO, FRAME_DT, LEAD, Traffic, Vehicle, VehicleState, WARMUP_FRAMES,
+    AnomalyWindow, EGO, FRAME_DT, Traffic, Vehicle, VehicleState, WARMUP_FRAMES,
 };
 use crate::synth::road::{LightState, Road};
 use crate::synth::spec::ScenarioSpec;
@@ -35,20 +36,14 @@ fn accelerations(
         if matches!(v.route, Route::Parked { .. }) {
             continue;
         }
-        match dyns[i].phase {
-            Emergency::Braking => {
-                out[i] = if dyns[i].v > 0.0 {
-                    -script.brake_decel
-                } else {
-                    0.0
-                };
-                continue;
-            }
-            Emergency::Holding { until } if t < until => {
-                out[i] = 0.0;
-                continue;
-            }
-            _ => {}
+        let scripted_decel = match dyns[i].phase {
+            Emergency::Braking => Some(script.brake_decel),
+            Emergency::Slowing { decel } => Some(decel),
+            Emergency::None => None,
+        };
+        if let Some(decel) = scripted_decel {
+            out[i] = if dyns[i].v > 0.0 { -decel } else { 0.0 };
+            continue;
         }
         let speed = dyns[i].v;
         let mut idm = v.idm;
@@ -58,8 +53,14 @@ fn accelerations(
             idm.v0 = 9.0;
         }
         let mut a = idm.accel(speed, f32::INFINITY, 0.0);
-        if let Some((gap, v_lead)) = snap.leader(i, dyns) {
-            a = a.min(idm.accel(speed, gap, v_lead));
+        if let Some((gap, j)) = snap.leader_index(i) {
+            let (v_lead, a_lead) = (dyns[j].v, dyns[j].a);
+            a = if i == EGO && script.ego_follows {
+                let centre = gap + 0.5 * (v.model.length + snap.vehicles[j].model.length);
+                follow_accel(speed, gap, centre, v_lead, a_lead, idm.a_max, idm.b_max)
+            } else {
+                a.min(idm.accel(speed, gap, v_lead))
+            };
         }
         if let Some((xi, dist, cross)) = next_stop_line(road, v, &p)
             && dist < 120.0
@@ -144,7 +145,6 @@ pub(super) fn run(
             lane_change: None,
             yellow: None,
             phase: Emergency::None,
-            stop_frame: None,
             brake_lights: false,
         })
         .collect();
@@ -190,7 +190,7 @@ pub(super) fn run(
                 };
             }
             if sub == 0 && frame >= 0 {
-                states.push(record(road, &vehicles, &dyns, &snap, frame));
+                states.push(record(road, &vehicles, &dyns, &snap));
                 lights.push(road.intersections.iter().map(|x| x.main_light(t)).collect());
             }
             for (i, dy) in dyns.iter_mut().enumerate() {
@@ -203,12 +203,6 @@ pub(super) fn run(
                         dy.sigma += dy.v * dy.v / (-2.0 * dy.a);
                     }
                     dy.v = 0.0;
-                    if dy.phase == Emergency::Braking {
-                        dy.phase = Emergency::Holding {
-                            until: t + dt + script.hold_s,
-                        };
-                        dy.stop_frame = Some(frame + 1);
-                    }
                 } else {
                     dy.sigma += 0.5 * (dy.v + v_new) * dt;
                     dy.v = v_new;
@@ -216,10 +210,10 @@ pub(super) fn run(
             }
         }
     }
-    let anomaly = match (script.brake_frame, dyns[LEAD].stop_frame) {
-        (Some(a), Some(b)) if a >= 0 && b < frames => Some(AnomalyWindow {
+    let anomaly = match script.brake_frame {
+        Some(a) if a >= 0 && a + BRAKE_FRAMES < frames => Some(AnomalyWindow {
             start: a as u32,
-            end: b as u32,
+            end: (a + BRAKE_FRAMES) as u32,
         }),
         _ => None,
     };
@@ -237,14 +231,8 @@ pub(super) fn run(
     }
 }
 
-/// The recorded states of all vehicles at `frame`.
-fn record(
-    road: &Road,
-    vehicles: &[Vehicle],
-    dyns: &[Dyn],
-    snap: &Snapshot,
-    frame: i64,
-) -> Vec<VehicleState> {
+/// The recorded states of all vehicles at the current frame.
+fn record(road: &Road, vehicles: &[Vehicle], dyns: &[Dyn], snap: &Snapshot) -> Vec<VehicleState> {
     vehicles
         .iter()
         .zip(dyns)
@@ -252,7 +240,7 @@ fn record(
         .map(|((v, dy), p)| {
             let (x, y) = road.centerline.to_world(p.s, p.d);
             let heading = road.centerline.heading(p.s);
-            let emergency = dy.phase == Emergency::Braking || dy.stop_frame == Some(frame);
+            let emergency = dy.phase == Emergency::Braking;
             let parked = matches!(v.route, Route::Parked { .. });
             let brake = if emergency {
                 1.0

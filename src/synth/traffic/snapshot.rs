@@ -68,16 +68,16 @@ impl<'a> Snapshot<'a> {
         }
     }
 
-    /// Gap to and speed of the leader of vehicle `i`.
-    pub(super) fn leader(&self, i: usize, dyns: &[Dyn]) -> Option<(f32, f32)> {
+    /// Gap (bumper to bumper) to and index of the leader of vehicle `i`.
+    pub(super) fn leader_index(&self, i: usize) -> Option<(f32, usize)> {
         let p = self.poses[i];
         let me = &self.vehicles[i];
-        let mut best: Option<(f32, f32)> = None;
+        let mut best: Option<(f32, usize)> = None;
         let mut consider = |j: usize, along: f32| {
             let other = &self.vehicles[j];
             let gap = along - 0.5 * (me.model.length + other.model.length);
             if best.is_none_or(|(g, _)| gap < g) {
-                best = Some((gap, dyns[j].v));
+                best = Some((gap, j));
             }
         };
         if let Some((_, positive)) = p.cross_lane {

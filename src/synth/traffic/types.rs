@@ -74,7 +74,8 @@ pub struct VehicleState {
     pub steer: f32,
     /// Whether the brake lights are on.
     pub brake_lights: bool,
-    /// Whether the vehicle is emergency braking (brake onset to standstill).
+    /// Whether the vehicle is in the scripted full brake (the lead's 30 frames, standstill
+    /// included).
     pub emergency: bool,
     /// Whether the vehicle is on a cross street beyond its end ([`CROSS_STREET_END`] from
     /// the main road, less on the inner side of a bend): it has driven off it, or (streamed
@@ -84,12 +85,13 @@ pub struct VehicleState {
     pub beyond_street_end: bool,
 }
 
-/// The inclusive frame window of the anomaly (brake onset to standstill).
+/// The inclusive frame window of the anomaly: brake onset to the frame the brake is
+/// released, 31 frames as AnoVox labels them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct AnomalyWindow {
     /// First frame of the window (brake onset).
     pub start: u32,
-    /// Last frame of the window (first frame at standstill).
+    /// Last frame of the window (brake onset + 30).
     pub end: u32,
 }
 
