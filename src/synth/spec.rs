@@ -203,7 +203,8 @@ pub fn weather_slug(w: Weather) -> &'static str {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Preset {
-    /// Normal driving only, several towns, city and highway, sun and rain.
+    /// Normal driving only, several towns, city and highway in every weather, turning and
+    /// cut-in leads among them.
     Train,
     /// 13 sudden-braking scenarios over city/highway × sun/rain with normal traffic.
     Test,
@@ -326,8 +327,11 @@ impl DatasetPlan {
 /// Expands a request into concrete scenario specs. Every `Any`/`Mixed` choice is a seeded
 /// draw, so the same request always gives the same list.
 ///
-/// - `train`: normal driving only, town cycling over 6 towns, city and highway alternating,
-///   sun and rain.
+/// - `train`: normal driving only (no anomaly): city and highway alternating in sun, rain,
+///   fog and night, town cycling over 6 towns; in every eight scenarios one turning and one
+///   cut-in lead when the recordings are long enough for them (120 frames). Half of the
+///   scenarios follow their lead closely by AnoVox's rule, and half of the leads slow
+///   down gently for a moment (`traffic`).
 /// - `test`: 13 sudden-braking scenarios cycling through city/highway × sun/rain.
 pub fn plan_dataset(request: &DatasetRequest) -> Result<Vec<ScenarioSpec>, SynthError> {
     let count = request.count.unwrap_or(match request.preset {
@@ -372,12 +376,20 @@ pub fn plan_dataset(request: &DatasetRequest) -> Result<Vec<ScenarioSpec>, Synth
         );
         let (preset_kind, preset_domain, preset_weather, town) = match request.preset {
             Some(Preset::Train) => {
-                let (d, w) = combos[i % 4];
+                // Both domains in every weather; a turning and a cut-in lead in every eight
+                // scenarios where the recording is long enough to show them.
+                let d = [Domain::City, Domain::Highway][i % 2];
+                let w = [Weather::Sun, Weather::Rain, Weather::Fog, Weather::Night][(i / 2) % 4];
+                let kind = match i % 8 {
+                    5 if frames >= ScenarioKind::Turning.min_frames() => ScenarioKind::Turning,
+                    7 if frames >= ScenarioKind::CutIn.min_frames() => ScenarioKind::CutIn,
+                    _ => ScenarioKind::Normal,
+                };
                 (
-                    ScenarioKind::Normal,
+                    kind,
                     Some(d),
                     Some(w),
-                    format!("SynthTown{:02}", 1 + (i / 4) % 6),
+                    format!("SynthTown{:02}", 1 + (i / 8) % 6),
                 )
             }
             Some(Preset::Test) => {
@@ -481,19 +493,39 @@ mod tests {
     }
 
     #[test]
-    fn train_preset_is_normal_only_and_choices_are_honoured() {
+    fn train_preset_is_normal_driving_in_every_condition_and_choices_are_honoured() {
         let req = DatasetRequest {
             preset: Some(Preset::Train),
-            ..DatasetRequest::new(12, 9)
+            frames: Some(120),
+            ..DatasetRequest::new(24, 9)
         };
         let plan = plan_dataset(&req).unwrap();
-        assert!(plan.iter().all(|s| s.kind == ScenarioKind::Normal));
-        assert!(
-            plan.iter()
-                .all(|s| matches!(s.weather, Weather::Sun | Weather::Rain))
-        );
+        assert!(plan.iter().all(|s| s.kind != ScenarioKind::Braking));
+        for kind in [
+            ScenarioKind::Normal,
+            ScenarioKind::Turning,
+            ScenarioKind::CutIn,
+        ] {
+            assert!(plan.iter().any(|s| s.kind == kind), "{kind:?}");
+        }
+        for d in [Domain::City, Domain::Highway] {
+            for w in [Weather::Sun, Weather::Rain, Weather::Fog, Weather::Night] {
+                assert!(plan.iter().any(|s| s.domain == d && s.weather == w));
+            }
+        }
         let towns: std::collections::HashSet<_> = plan.iter().map(|s| s.town.clone()).collect();
         assert!(towns.len() >= 3);
+        // Recordings too short for a turn keep to normal driving.
+        let short = DatasetRequest {
+            frames: Some(24),
+            ..req.clone()
+        };
+        assert!(
+            plan_dataset(&short)
+                .unwrap()
+                .iter()
+                .all(|s| s.kind == ScenarioKind::Normal)
+        );
         let req = DatasetRequest {
             kind: Some(KindChoice::Only(ScenarioKind::CutIn)),
             domain: Some(DomainChoice::Highway),

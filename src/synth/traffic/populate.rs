@@ -243,11 +243,8 @@ fn stage_event(
         ScenarioKind::Normal if frames >= 40 && rng.chance(0.5) => {
             // The lead slows down for a moment, within normal braking.
             let from = rng.range(0.15, 0.75) * frames as f32;
-            script.gentle_brake = Some((
-                from as i64,
-                10 + rng.below(21) as i64,
-                rng.range(1.5, 2.8),
-            ));
+            script.gentle_brake =
+                Some((from as i64, 10 + rng.below(21) as i64, rng.range(1.5, 2.8)));
         }
         ScenarioKind::Turning if !highway => {
             // Keep the lead moving towards its turn.

@@ -3,13 +3,11 @@
 //! the recorded state of every vehicle at the 10 Hz frame times.
 
 use super::dynamics::{Dyn, Emergency};
-use super::route::{Pose, Route, TURN_RADIUS, cross_street_end, pose_of};
 use super::follow::follow_accel;
+use super::route::{Pose, Route, TURN_RADIUS, cross_street_end, pose_of};
 use super::script::{BRAKE_FRAMES, Script, apply_script};
 use super::snapshot::{Snapshot, box_occupancy, next_stop_line};
-use super::types::{
-    AnomalyWindow, EGO, FRAME_DT, Traffic, Vehicle, VehicleState, WARMUP_FRAMES,
-};
+use super::types::{AnomalyWindow, EGO, FRAME_DT, Traffic, Vehicle, VehicleState, WARMUP_FRAMES};
 use crate::synth::road::{LightState, Road};
 use crate::synth::spec::ScenarioSpec;
 
