@@ -318,3 +318,22 @@ pub struct FrameRecord {
     /// Explicit frame-level anomaly flag (`frame_labels.csv`).
     pub anomalous: Option<bool>,
 }
+
+impl FrameRecord {
+    /// A frame with only its camera image: no other modality, no boxes, no label. Set the
+    /// rest with struct update syntax (`FrameRecord { boxes, ..FrameRecord::new(id, rgb) }`).
+    pub fn new(id: FrameId, rgb: image::RgbImage) -> Self {
+        Self {
+            id,
+            rgb,
+            semantic: None,
+            instance: None,
+            depth_m: None,
+            flow: None,
+            action: None,
+            anomaly: None,
+            boxes: Vec::new(),
+            anomalous: None,
+        }
+    }
+}
