@@ -21,7 +21,7 @@
 //! model (flow by DIS, as the samples ship without flow), so the bench needs no bundled
 //! model. Run: `cargo bench --bench app`.
 
-#[path = "../tests/app_common/mod.rs"]
+#[path = "../tests/support/app.rs"]
 mod app_common;
 
 use std::hint::black_box;

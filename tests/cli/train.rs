@@ -1,0 +1,319 @@
+//! `vadscope train` end to end on tiny generated scenarios: the validation loss falls, the
+//! final checkpoint loads with its training statistics, an interrupted run resumes, a single
+//! stage continues from an earlier run's checkpoint (`--init`), and bad
+//! input (no scenarios, an unwritable output folder, a corrupt checkpoint, a second run in a
+//! used folder) fails with a message that names the problem.
+
+use crate::support::cli::{text, vadscope};
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+use burn::tensor::Device;
+use vadscope::model::{Detector, ModelConfig, load_checkpoint};
+use vadscope::train::CubeSet;
+
+fn path(p: &Path) -> &str {
+    p.to_str().expect("utf-8 temp path")
+}
+
+/// Two 10-frame 96×64 normal-driving scenarios in `dir`.
+fn generate(dir: &Path) {
+    let out = vadscope(&[
+        "generate",
+        "--out",
+        path(dir),
+        "--count",
+        "2",
+        "--kind",
+        "normal",
+        "--frames",
+        "10",
+        "--size",
+        "96x64",
+        "--seed",
+        "5",
+    ]);
+    assert!(out.status.success(), "generate: {}", text(&out.stderr));
+}
+
+/// Writes a tiny model config (16×16 cubes, 4 base features, 8 memory slots) beside `dir`'s
+/// other files and returns its path.
+fn tiny_model(dir: &Path) -> PathBuf {
+    let config = ModelConfig {
+        preset: "test-tiny".into(),
+        patch_size: 16,
+        feature_root: 4,
+        num_slots: 8,
+        shrink_thres: 1.0 / 8.0,
+        nf_start: 8,
+        nf_max: 16,
+        ..ModelConfig::compact()
+    };
+    let file = dir.join("tiny_model.json");
+    std::fs::write(&file, serde_json::to_string(&config).unwrap()).unwrap();
+    file
+}
+
+/// A fast training run: the model of `model` (a config file, or a checkpoint when `extra`
+/// holds `--init`), a few steps of 8 cubes per epoch, learning rates high enough to move in
+/// a few steps.
+fn tiny(data: &Path, out: &Path, model: Option<&Path>, extra: &[&str]) -> Vec<String> {
+    let mut args: Vec<String> = [
+        "train",
+        "--data",
+        path(data),
+        "--out",
+        path(out),
+        "--batch",
+        "8",
+        "--max-steps",
+        "3",
+        "--eval-batch",
+        "16",
+        "--memae-lr",
+        "2e-3",
+        "--cvae-lr",
+        "1e-3",
+        "--finetune-lr",
+        "1e-3",
+        "--seed",
+        "1",
+        "--val-fraction",
+        "0.5",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    if let Some(model) = model {
+        args.extend(["--model-config".to_string(), path(model).to_string()]);
+    }
+    args.extend(extra.iter().map(|s| s.to_string()));
+    args
+}
+
+fn run(args: &[String]) -> Output {
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    vadscope(&args)
+}
+
+/// Validation losses of `stage` in epoch order, from the per-epoch lines.
+fn validation_losses(stdout: &str, stage: usize) -> Vec<f64> {
+    stdout
+        .lines()
+        .filter(|l| l.starts_with(&format!("stage {stage} ")) && l.contains(" epoch "))
+        .filter_map(|l| {
+            l.split("validation loss ")
+                .nth(1)?
+                .split(',')
+                .next()?
+                .parse()
+                .ok()
+        })
+        .collect()
+}
+
+#[test]
+fn training_lowers_the_loss_and_writes_a_checkpoint_with_statistics() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let out = dir.path().join("run");
+    generate(&data);
+    let model = tiny_model(dir.path());
+
+    let trained = run(&tiny(&data, &out, Some(&model), &["--epochs", "3"]));
+    let stdout = text(&trained.stdout);
+    assert!(
+        trained.status.success(),
+        "train failed: {}\n{stdout}",
+        text(&trained.stderr)
+    );
+    for stage in 1..=3 {
+        let losses = validation_losses(&stdout, stage);
+        assert_eq!(losses.len(), 3, "stage {stage} epoch lines:\n{stdout}");
+        assert!(losses.iter().all(|l| l.is_finite() && *l > 0.0));
+        if stage == 1 {
+            assert!(
+                losses[2] < losses[0],
+                "stage 1 validation loss should fall: {losses:?}"
+            );
+        }
+    }
+
+    let trained_model = out.join("model.safetensors");
+    assert!(stdout.contains(path(&trained_model)), "{stdout}");
+    let checkpoint = load_checkpoint(&trained_model, &Device::flex()).expect("checkpoint loads");
+    assert_eq!(checkpoint.meta.config.preset, "test-tiny");
+    let stats = checkpoint.meta.stats.expect("training statistics stored");
+    assert!(stats.cubes > 0);
+    assert!(stats.flow_score.mean > 0.0 && stats.frame_score.std > 0.0);
+    assert!(stats.frame_pixel.iqr >= 0.0 && stats.flow_pixel.total > 0);
+
+    let again = run(&tiny(&data, &out, Some(&model), &["--epochs", "3"]));
+    assert!(!again.status.success());
+    assert!(
+        text(&again.stderr).contains("already holds a training run"),
+        "{}",
+        text(&again.stderr)
+    );
+}
+
+#[test]
+fn an_interrupted_run_resumes_and_a_corrupt_checkpoint_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let out = dir.path().join("run");
+    generate(&data);
+    let model = tiny_model(dir.path());
+    let args = tiny(
+        &data,
+        &out,
+        Some(&model),
+        &["--stage", "memae", "--epochs", "3"],
+    );
+
+    // Stop the run as soon as its first epoch is checkpointed.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vadscope"))
+        .args(&args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("train starts");
+    let stdout = child.stdout.take().expect("piped stdout");
+    let first_epoch = BufReader::new(stdout)
+        .lines()
+        .map_while(Result::ok)
+        .find(|l| l.starts_with("stage 1 memae epoch 1/3"));
+    child.kill().expect("kill the run");
+    child.wait().expect("reap the run");
+    assert!(first_epoch.is_some(), "the run never finished an epoch");
+    assert!(!out.join("model.safetensors").exists());
+
+    // A damaged checkpoint in a copy of the folder is named in the error.
+    let damaged = dir.path().join("damaged");
+    std::fs::create_dir(&damaged).unwrap();
+    for entry in std::fs::read_dir(&out).unwrap() {
+        let entry = entry.unwrap();
+        std::fs::copy(entry.path(), damaged.join(entry.file_name())).unwrap();
+    }
+    std::fs::write(damaged.join("last_model.bpk"), b"not a checkpoint").unwrap();
+    let failed = run(&tiny(
+        &data,
+        &damaged,
+        Some(&model),
+        &["--stage", "memae", "--epochs", "3", "--resume"],
+    ));
+    assert!(!failed.status.success());
+    assert!(
+        text(&failed.stderr).contains("last_model.bpk"),
+        "{}",
+        text(&failed.stderr)
+    );
+
+    let mut resume_args = args;
+    resume_args.push("--resume".into());
+    let resumed = run(&resume_args);
+    let stdout = text(&resumed.stdout);
+    assert!(
+        resumed.status.success(),
+        "resume failed: {}\n{stdout}",
+        text(&resumed.stderr)
+    );
+    assert!(stdout.contains("stage 1: resuming at epoch"), "{stdout}");
+    assert!(
+        !stdout.contains("epoch 1/3"),
+        "the finished epoch must not run again:\n{stdout}"
+    );
+    assert!(stdout.contains("epoch 3/3"), "{stdout}");
+    let stage1 = out.join("model.safetensors");
+    assert!(
+        load_checkpoint(&stage1, &Device::flex())
+            .unwrap()
+            .meta
+            .stats
+            .is_some()
+    );
+
+    // Stage 2 alone, started from the stage-1 model: ML-MemAE-SC (hence S_r) is unchanged
+    // while the CVAE (hence S_p) trains.
+    let cvae = dir.path().join("cvae");
+    let second = run(&tiny(
+        &data,
+        &cvae,
+        None,
+        &["--stage", "cvae", "--epochs", "1", "--init", path(&stage1)],
+    ));
+    assert!(second.status.success(), "{}", text(&second.stderr));
+    let cubes = CubeSet::load(&out.join("cubes.safetensors")).unwrap();
+    let (frames, flows) = cubes.gather(&[0, 1, 2]);
+    let before = Detector::from_checkpoint(&stage1).unwrap();
+    let after = Detector::from_checkpoint(&cvae.join("model.safetensors")).unwrap();
+    let before = before.infer(&frames, &flows).unwrap();
+    let after = after.infer(&frames, &flows).unwrap();
+    for (b, a) in before.iter().zip(&after) {
+        assert!(
+            (b.s_r - a.s_r).abs() <= 1e-4 * b.s_r.abs().max(1.0),
+            "S_r moved"
+        );
+    }
+    assert!(
+        before.iter().zip(&after).any(|(b, a)| b.s_p != a.s_p),
+        "stage 2 should change the frame prediction"
+    );
+}
+
+#[test]
+fn bad_input_gives_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let out = dir.path().join("run");
+
+    let no_data = run(&tiny(&empty, &out, None, &["--epochs", "1"]));
+    assert!(!no_data.status.success());
+    let message = text(&no_data.stderr);
+    assert!(
+        message.contains(path(&empty)) && message.contains("no Scenario_* folders"),
+        "{message}"
+    );
+
+    let data = dir.path().join("data");
+    generate(&data);
+    let blocker = dir.path().join("a_file");
+    std::fs::write(&blocker, b"x").unwrap();
+    let unwritable = run(&tiny(&data, &blocker.join("run"), None, &["--epochs", "1"]));
+    assert!(!unwritable.status.success());
+    assert!(
+        text(&unwritable.stderr).contains("cannot create the output folder"),
+        "{}",
+        text(&unwritable.stderr)
+    );
+
+    let nothing = run(&tiny(&data, &dir.path().join("fresh"), None, &["--resume"]));
+    assert!(!nothing.status.success());
+    assert!(
+        text(&nothing.stderr).contains("no run to resume"),
+        "{}",
+        text(&nothing.stderr)
+    );
+
+    let help = vadscope(&["train", "--help"]);
+    let help = text(&help.stdout);
+    for option in [
+        "--data",
+        "--out",
+        "--stage",
+        "--preset",
+        "--epochs",
+        "--batch",
+        "--seed",
+        "--resume",
+        "--frame-stride",
+        "--val-fraction",
+        "--config",
+        "--model-config",
+        "--init",
+    ] {
+        assert!(help.contains(option), "--help lacks {option}:\n{help}");
+    }
+}
