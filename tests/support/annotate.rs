@@ -1,13 +1,13 @@
-//! A small scenario for the annotate tests: the moving square of [`super::score`] over 8
+//! A small scenario for the annotate tests: the moving square of [`super::scenario`] over 8
 //! frames with AnoVox ids 100, 102, ... (so that ids and indices differ), a second track
 //! on frames 2–4 and anomalous frames 3–5.
 
 use std::path::{Path, PathBuf};
 
 use vadscope::annotate::{Edit, Interval, IntervalId, Keyframe, Origin, Rect};
-use vadscope::sequence::{BoxRecord, FrameId, FrameRecord, ScenarioMeta, ScenarioWriter};
+use vadscope::sequence::{BoxRecord, FrameId, FrameRecord};
 
-use super::score::{square_box, square_frame};
+use super::scenario::{ScenarioBuilder, square_box, square_frame};
 
 /// Frames of the test scenario.
 pub const FRAMES: u64 = 8;
@@ -34,8 +34,7 @@ pub fn second_box(k: u64) -> BoxRecord {
 
 /// Writes the test scenario into `dir/s` and returns its folder.
 pub fn write_scenario(dir: &Path) -> PathBuf {
-    let writer = ScenarioWriter::create(&dir.join("s"), &ScenarioMeta::default()).expect("writer");
-    for k in 0..FRAMES {
+    let frame = |k: u64| {
         let mut boxes = vec![BoxRecord {
             frame: frame_id(k),
             ..square_box(k)
@@ -43,22 +42,15 @@ pub fn write_scenario(dir: &Path) -> PathBuf {
         if (2..=4).contains(&k) {
             boxes.push(second_box(k));
         }
-        writer
-            .write_frame(&FrameRecord {
-                id: frame_id(k),
-                rgb: square_frame(k),
-                semantic: None,
-                instance: None,
-                depth_m: None,
-                flow: None,
-                action: None,
-                anomaly: None,
-                boxes,
-                anomalous: Some((3..=5).contains(&k)),
-            })
-            .expect("write frame");
-    }
-    writer.finish().expect("finish")
+        FrameRecord {
+            boxes,
+            anomalous: Some((3..=5).contains(&k)),
+            ..FrameRecord::new(frame_id(k), square_frame(k))
+        }
+    };
+    ScenarioBuilder::new()
+        .frames((0..FRAMES).map(frame))
+        .write(&dir.join("s"))
 }
 
 /// A box.

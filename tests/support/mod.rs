@@ -11,5 +11,6 @@ pub mod app;
 pub mod cli;
 pub mod flow;
 pub mod render;
+pub mod scenario;
 pub mod score;
 pub mod sequence;

@@ -1,16 +1,13 @@
-//! Helpers of the score tests (and of the annotate tests' scenario): hand-built score
-//! tables and small scenarios with a moving square, written on the fly.
+//! Helpers of the score tests: hand-built score tables, their objects and statistics. The
+//! scenarios the score tests run on are in [`super::scenario`].
 
-use std::path::{Path, PathBuf};
-
-use image::{Rgb, RgbImage};
 use vadscope::eval::RobustStats;
 use vadscope::model::{PixelStats, ScoreStats, TrainingStats};
 use vadscope::score::{
     CacheKey, FrameEntry, FrameState, ModelKey, ObjectMaps, ObjectScore, PixelReference, ScoreMeta,
     ScoreTable,
 };
-use vadscope::sequence::{BoxRecord, FrameId, FrameRecord, ScenarioMeta, ScenarioWriter};
+use vadscope::sequence::{BoxRecord, FrameId};
 
 /// Pixel statistics with the given median and quartiles.
 pub fn pixel_stats(median: f64, q25: f64, q75: f64) -> PixelStats {
@@ -140,74 +137,4 @@ pub fn constant_maps(flow: f32, frame: f32) -> ObjectMaps {
         predicted: vec![128; 192],
         recon_flow: vec![0.5; 128],
     }
-}
-
-/// Width of the moving-square scenario's frames.
-pub const SQUARE_W: u32 = 96;
-/// Height of the moving-square scenario's frames.
-pub const SQUARE_H: u32 = 64;
-/// Side of the square.
-pub const SQUARE: u32 = 16;
-
-/// Left edge of the square in frame `k`: 8 + 4k, top edge 24.
-pub fn square_x(k: u64) -> u32 {
-    8 + 4 * k as u32
-}
-
-/// Frame `k` of the moving square: a square with vertical stripes 5 px wide (so that its
-/// inside changes as it moves, as a textured car does) on a dark, faintly textured
-/// background.
-pub fn square_frame(k: u64) -> RgbImage {
-    let x0 = square_x(k);
-    RgbImage::from_fn(SQUARE_W, SQUARE_H, |x, y| {
-        if (x0..x0 + SQUARE).contains(&x) && (24..24 + SQUARE).contains(&y) {
-            if ((x - x0) / 5).is_multiple_of(2) {
-                Rgb([220, 200, 180])
-            } else {
-                Rgb([120, 110, 100])
-            }
-        } else {
-            let t = ((x * 7 + y * 13) % 5) as u8;
-            Rgb([40 + t, 45 + t, 50 + t])
-        }
-    })
-}
-
-/// The ground-truth box of the square in frame `k`.
-pub fn square_box(k: u64) -> BoxRecord {
-    let x0 = square_x(k) as f32;
-    BoxRecord {
-        frame: FrameId(k),
-        track_id: 5,
-        x1: x0,
-        y1: 24.0,
-        x2: x0 + SQUARE as f32,
-        y2: 24.0 + SQUARE as f32,
-        class: 14,
-        score: 1.0,
-        anomalous: k >= 4,
-    }
-}
-
-/// Writes `frames` frames of the moving square (ground-truth boxes, labels: anomalous from
-/// frame 4 on) into `dir`.
-pub fn write_square_scenario(dir: &Path, frames: u64, meta: &ScenarioMeta) -> PathBuf {
-    let writer = ScenarioWriter::create(dir, meta).expect("create writer");
-    for k in 0..frames {
-        writer
-            .write_frame(&FrameRecord {
-                id: FrameId(k),
-                rgb: square_frame(k),
-                semantic: None,
-                instance: None,
-                depth_m: None,
-                flow: None,
-                action: None,
-                anomaly: None,
-                boxes: vec![square_box(k)],
-                anomalous: Some(k >= 4),
-            })
-            .expect("write frame");
-    }
-    writer.finish().expect("finish")
 }

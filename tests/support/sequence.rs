@@ -1,9 +1,10 @@
-//! Helpers of the sequence tests: small scenarios written on the fly.
+//! Helpers of the sequence tests: small frames and the files of hand-made scenarios (the
+//! scenarios themselves are written with [`super::scenario::ScenarioBuilder`]).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use image::{GrayImage, Luma, Rgb, RgbImage};
-use vadscope::sequence::{FrameId, FrameRecord, ScenarioMeta, ScenarioWriter};
+use vadscope::sequence::{FrameId, FrameRecord};
 
 /// Frame width used by the tests.
 pub const W: u32 = 16;
@@ -15,20 +16,9 @@ pub fn rgb_frame(k: u64) -> RgbImage {
     RgbImage::from_fn(W, H, |x, y| Rgb([x as u8, y as u8, k as u8]))
 }
 
-/// A frame record with only an RGB image.
+/// A frame record with only an RGB image ([`rgb_frame`]).
 pub fn rgb_only(id: u64) -> FrameRecord {
-    FrameRecord {
-        id: FrameId(id),
-        rgb: rgb_frame(id),
-        semantic: None,
-        instance: None,
-        depth_m: None,
-        flow: None,
-        action: None,
-        anomaly: None,
-        boxes: Vec::new(),
-        anomalous: None,
-    }
+    FrameRecord::new(FrameId(id), rgb_frame(id))
 }
 
 /// A semantic image of road (1) with a `class` block at x 4..8, y 3..7.
@@ -40,15 +30,6 @@ pub fn semantic_with_block(class: u8) -> GrayImage {
             1
         }])
     })
-}
-
-/// Writes `frames` through `ScenarioWriter` into `dir` and returns the folder.
-pub fn write_scenario(dir: &Path, meta: &ScenarioMeta, frames: &[FrameRecord]) -> PathBuf {
-    let writer = ScenarioWriter::create(dir, meta).expect("create writer");
-    for frame in frames {
-        writer.write_frame(frame).expect("write frame");
-    }
-    writer.finish().expect("finish")
 }
 
 /// Writes an 8-bit RGB PNG, creating the folder.

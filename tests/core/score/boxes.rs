@@ -3,14 +3,14 @@
 
 use std::path::Path;
 
-use crate::support::score::{SQUARE, square_box, square_frame, square_x, write_square_scenario};
+use crate::support::scenario::{SQUARE, square_box, square_frame, square_scenario, square_x};
 use vadscope::score::detections::{FrameRef, parse_coco, parse_mot, parse_yolo};
 use vadscope::score::motion::{blur_frame, motion_boxes};
 use vadscope::score::{
     BoxMatchStats, BoxProvider, BoxSource, DetectionFile, DetectionFormat, FrameNumbering,
     MotionParams, box_iou, match_boxes, match_scenario,
 };
-use vadscope::sequence::{BoxRecord, FrameId, Scenario, ScenarioMeta};
+use vadscope::sequence::{BoxRecord, FrameId, Scenario};
 
 fn bbox(x1: f32, y1: f32, x2: f32, y2: f32) -> BoxRecord {
     BoxRecord {
@@ -267,7 +267,7 @@ fn coco_shapes_parse() {
 #[test]
 fn imported_files_are_assigned_to_frames_and_keyed_by_content() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let root = write_square_scenario(&dir.path().join("s"), 6, &ScenarioMeta::default());
+    let root = square_scenario(6).write(&dir.path().join("s"));
     let scenario = Scenario::open(&root).expect("open");
 
     // MOT numbers frames from 1; frame 9 is not in the scenario.
@@ -350,7 +350,7 @@ fn imported_files_are_assigned_to_frames_and_keyed_by_content() {
 #[test]
 fn motion_and_ground_truth_sources_against_the_ground_truth() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let root = write_square_scenario(&dir.path().join("s"), 6, &ScenarioMeta::default());
+    let root = square_scenario(6).write(&dir.path().join("s"));
     let scenario = Scenario::open(&root).expect("open");
 
     let gt = match_scenario(&scenario, &BoxSource::GroundTruth, 0.5).expect("gt");

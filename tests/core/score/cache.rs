@@ -3,12 +3,13 @@
 
 use std::path::Path;
 
-use crate::support::score::{object, table, write_square_scenario};
+use crate::support::scenario::square_scenario;
+use crate::support::score::{object, table};
 use vadscope::score::cache::{frame_ids_hash, map_stride};
 use vadscope::score::{
     CacheKey, CacheWriter, ModelKey, ObjectMaps, ScoreCache, ScoreTable, write_cache,
 };
-use vadscope::sequence::{Scenario, ScenarioMeta};
+use vadscope::sequence::Scenario;
 
 /// Maps whose values identify the object (f16-exact for the reconstructed flow).
 fn maps_of(k: usize) -> ObjectMaps {
@@ -192,7 +193,7 @@ fn inconsistent_tables_are_refused_when_writing() {
 #[test]
 fn lookup_finds_the_cache_of_a_key_and_rejects_stale_ones() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let root = write_square_scenario(&dir.path().join("scenario"), 4, &ScenarioMeta::default());
+    let root = square_scenario(4).write(&dir.path().join("scenario"));
     let scenario = Scenario::open(&root).expect("open scenario");
     let key = CacheKey {
         scenario: scenario.name().to_string(),

@@ -3,36 +3,29 @@
 
 use std::sync::Arc;
 
-use crate::support::score::{square_box, square_frame};
+use crate::support::scenario::{ScenarioBuilder, square_box, square_record};
 use vadscope::flow::{DisPreset, FlowField};
 use vadscope::score::{FlowProvider, FlowSource, ModelKey};
-use vadscope::sequence::{FrameId, FrameRecord, Scenario, ScenarioMeta, ScenarioWriter};
+use vadscope::sequence::{FrameRecord, Scenario};
 
 /// Five frames of the moving square; a stored flow (u = 4 everywhere) at frames 1 and 2 only.
 fn scenario(dir: &std::path::Path) -> Scenario {
-    let writer = ScenarioWriter::create(&dir.join("s"), &ScenarioMeta::default()).expect("writer");
-    for k in 0..5u64 {
+    let frame = |k: u64| {
         let flow = (1..=2).contains(&k).then(|| {
             let mut f = FlowField::zeros(96, 64);
             f.uv.chunks_mut(2).for_each(|px| px[0] = 4.0);
             f
         });
-        writer
-            .write_frame(&FrameRecord {
-                id: FrameId(k),
-                rgb: square_frame(k),
-                semantic: None,
-                instance: None,
-                depth_m: None,
-                flow,
-                action: None,
-                anomaly: None,
-                boxes: vec![square_box(k)],
-                anomalous: None,
-            })
-            .expect("frame");
-    }
-    Scenario::open(&writer.finish().expect("finish")).expect("open")
+        FrameRecord {
+            flow,
+            anomalous: None,
+            ..square_record(k)
+        }
+    };
+    let folder = ScenarioBuilder::new()
+        .frames((0..5).map(frame))
+        .write(&dir.join("s"));
+    Scenario::open(&folder).expect("open")
 }
 
 #[test]

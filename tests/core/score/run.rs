@@ -6,7 +6,8 @@ use std::cell::Cell;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use crate::support::score::{object, square_box, table, training_stats, write_square_scenario};
+use crate::support::scenario::{ScenarioBuilder, square_box, square_record, square_scenario};
+use crate::support::score::{object, table, training_stats};
 use burn::tensor::Device;
 use image::{GrayImage, Luma};
 use vadscope::eval::{RocCurve, ScoreMetrics};
@@ -20,7 +21,9 @@ use vadscope::score::{
     ScoreError, ScoreProgress, ScoreRequest, ScoringPlan, add_scenario_pixels, evaluate_dataset,
     format_eval_table, run_scoring, score_scenario_with,
 };
-use vadscope::sequence::{BoxRecord, Domain, FrameId, Scenario, ScenarioMeta, Weather};
+use vadscope::sequence::{
+    BoxRecord, Domain, FrameId, FrameRecord, Scenario, ScenarioMeta, Weather,
+};
 
 const P: usize = 4;
 const T: usize = 2;
@@ -325,7 +328,9 @@ fn a_real_detector_scores_a_scenario_through_the_seams() {
         weather: Weather::Rain,
         ..ScenarioMeta::default()
     };
-    let root = write_square_scenario(&dir.path().join("scenario"), 6, &meta);
+    let root = square_scenario(6)
+        .meta(meta)
+        .write(&dir.path().join("scenario"));
     let scenario = Scenario::open(&root).expect("open");
     let detector = detector_with_stats();
     let p = detector.config().patch_size;
@@ -578,7 +583,7 @@ fn pixel_roc_matches_the_exact_curve_and_reads_scenario_masks() {
 
     // A scenario whose semantic images mark the square as the anomaly from frame 4 on.
     let dir = tempfile::tempdir().expect("tempdir");
-    let root = write_square_scenario(&dir.path().join("s"), 6, &ScenarioMeta::default());
+    let root = square_scenario(6).write(&dir.path().join("s"));
     let semantic = root.join("SEMANTIC_IMG");
     std::fs::create_dir_all(&semantic).expect("mkdir");
     for k in 0..6u64 {
@@ -636,10 +641,7 @@ fn pixel_roc_matches_the_exact_curve_and_reads_scenario_masks() {
 
 /// The square scenario with stored flows (u = 4 inside the square, where it moves).
 fn square_with_flow(dir: &std::path::Path, frames: u64) -> PathBuf {
-    use vadscope::sequence::{FrameRecord, ScenarioWriter};
-    let writer = ScenarioWriter::create(&dir.join("flow-scenario"), &ScenarioMeta::default())
-        .expect("writer");
-    for k in 0..frames {
+    let frame = |k: u64| {
         let mut flow = vadscope::sequence::FlowField::zeros(96, 64);
         let b = square_box(k);
         for y in b.y1 as u32..b.y2 as u32 {
@@ -647,22 +649,14 @@ fn square_with_flow(dir: &std::path::Path, frames: u64) -> PathBuf {
                 flow.uv[2 * (y as usize * 96 + x as usize)] = 4.0;
             }
         }
-        writer
-            .write_frame(&FrameRecord {
-                id: FrameId(k),
-                rgb: crate::support::score::square_frame(k),
-                semantic: None,
-                instance: None,
-                depth_m: None,
-                flow: (k > 0).then_some(flow),
-                action: None,
-                anomaly: None,
-                boxes: vec![square_box(k)],
-                anomalous: Some(k >= 4),
-            })
-            .expect("frame");
-    }
-    writer.finish().expect("finish")
+        FrameRecord {
+            flow: (k > 0).then_some(flow),
+            ..square_record(k)
+        }
+    };
+    ScenarioBuilder::new()
+        .frames((0..frames).map(frame))
+        .write(&dir.join("flow-scenario"))
 }
 
 #[test]
@@ -714,7 +708,7 @@ fn score_scenario_cuts_cubes_with_stc_from_stored_and_estimated_flows() {
 fn score_scenario_reports_missing_flows_and_broken_frames() {
     let dir = tempfile::tempdir().expect("tempdir");
     // No stored flow at all: frame 0 counts as zero motion, frame 1 needs its flow.
-    let root = write_square_scenario(&dir.path().join("no-flow"), 4, &ScenarioMeta::default());
+    let root = square_scenario(4).write(&dir.path().join("no-flow"));
     let scenario = Scenario::open(&root).expect("open");
     let detector = detector_with_stats();
     let never = AtomicBool::new(false);

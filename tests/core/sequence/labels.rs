@@ -1,7 +1,8 @@
 //! Frame-level anomaly flags in their order of preference (frame_labels.csv, semantic
 //! images, scenario window, ANOMALY brake, none) and boxes derived from instance images.
 
-use crate::support::sequence::{H, W, rgb_only, save_text, semantic_with_block, write_scenario};
+use crate::support::scenario::ScenarioBuilder;
+use crate::support::sequence::{H, W, rgb_only, save_text, semantic_with_block};
 use image::{GrayImage, Luma, Rgb, RgbImage};
 use vadscope::sequence::{
     AnomalyType, BoxSource, FrameId, FrameRecord, FrameWindow, KeyValues, LabelSource, Scenario,
@@ -41,11 +42,9 @@ fn frame_labels_file_wins_over_semantic_images() {
             ..with_semantic(id, if id == 3 { 100 } else { 14 })
         })
         .collect();
-    let dir = write_scenario(
-        &root.path().join("Scenario_a"),
-        &ScenarioMeta::default(),
-        &frames,
-    );
+    let dir = ScenarioBuilder::new()
+        .frames(frames)
+        .write(&root.path().join("Scenario_a"));
     let scenario = Scenario::open(&dir).expect("opens");
     let labels = scenario.frame_labels();
     assert_eq!(labels.source, LabelSource::FrameLabelsFile);
@@ -58,11 +57,9 @@ fn malformed_frame_labels_fall_back_to_semantic_images_and_are_noted() {
     let frames: Vec<FrameRecord> = (0..3)
         .map(|id| with_semantic(id, if id == 1 { 100 } else { 14 }))
         .collect();
-    let dir = write_scenario(
-        &root.path().join("Scenario_b"),
-        &ScenarioMeta::default(),
-        &frames,
-    );
+    let dir = ScenarioBuilder::new()
+        .frames(frames)
+        .write(&root.path().join("Scenario_b"));
     save_text(
         &dir.join("frame_labels.csv"),
         "frame,anomaly\n0,1\n1,maybe\n",
@@ -83,11 +80,9 @@ fn malformed_frame_labels_fall_back_to_semantic_images_and_are_noted() {
 fn frame_labels_with_missing_and_unknown_rows_are_noted() {
     let root = tempfile::tempdir().expect("temp dir");
     let frames: Vec<FrameRecord> = (0..4).map(rgb_only).collect();
-    let dir = write_scenario(
-        &root.path().join("Scenario_c"),
-        &ScenarioMeta::default(),
-        &frames,
-    );
+    let dir = ScenarioBuilder::new()
+        .frames(frames)
+        .write(&root.path().join("Scenario_c"));
     save_text(
         &dir.join("frame_labels.csv"),
         "frame,anomaly\n0,0\n1,1\n9,1\n",
@@ -118,11 +113,9 @@ fn frames_without_a_semantic_image_are_noted_when_semantic_images_decide() {
         rgb_only(2),
         with_semantic(3, 14),
     ];
-    let dir = write_scenario(
-        &root.path().join("Scenario_partial"),
-        &ScenarioMeta::default(),
-        &frames,
-    );
+    let dir = ScenarioBuilder::new()
+        .frames(frames)
+        .write(&root.path().join("Scenario_partial"));
     let labels = Scenario::open(&dir).expect("opens").frame_labels().clone();
     assert_eq!(labels.source, LabelSource::SemanticImages);
     assert_eq!(labels.flags, vec![true, false, false, false]);
@@ -145,7 +138,10 @@ fn scenario_window_from_metadata_is_used_without_images() {
         ..sudden_braking()
     };
     let frames: Vec<FrameRecord> = (10..15).map(|id| with_brake(id, 1.0)).collect();
-    let dir = write_scenario(&root.path().join("Scenario_d"), &meta, &frames);
+    let dir = ScenarioBuilder::new()
+        .meta(meta)
+        .frames(frames)
+        .write(&root.path().join("Scenario_d"));
     let labels = Scenario::open(&dir).expect("opens").frame_labels().clone();
     assert_eq!(labels.source, LabelSource::ScenarioWindow);
     assert_eq!(labels.flags, vec![false, true, true, false, false]);
@@ -155,7 +151,10 @@ fn scenario_window_from_metadata_is_used_without_images() {
 fn sudden_braking_of_a_complete_scenario_uses_indices_124_to_154() {
     let root = tempfile::tempdir().expect("temp dir");
     let frames: Vec<FrameRecord> = (16..216).map(|id| with_brake(id, 0.0)).collect();
-    let dir = write_scenario(&root.path().join("Scenario_e"), &sudden_braking(), &frames);
+    let dir = ScenarioBuilder::new()
+        .meta(sudden_braking())
+        .frames(frames)
+        .write(&root.path().join("Scenario_e"));
     let scenario = Scenario::open(&dir).expect("opens");
     let labels = scenario.frame_labels();
     assert_eq!(labels.source, LabelSource::ScenarioWindow);
@@ -177,7 +176,10 @@ fn incomplete_sudden_braking_falls_back_to_the_brake_column() {
         .enumerate()
         .map(|(i, &b)| with_brake(i as u64, b))
         .collect();
-    let dir = write_scenario(&root.path().join("Scenario_f"), &sudden_braking(), &frames);
+    let dir = ScenarioBuilder::new()
+        .meta(sudden_braking())
+        .frames(frames)
+        .write(&root.path().join("Scenario_f"));
     let labels = Scenario::open(&dir).expect("opens").frame_labels().clone();
     assert_eq!(labels.source, LabelSource::AnomalyBrake);
     assert_eq!(labels.flags, vec![false, false, true, true, false]);
@@ -187,11 +189,9 @@ fn incomplete_sudden_braking_falls_back_to_the_brake_column() {
 fn unreadable_anomaly_files_are_noted_and_count_as_normal() {
     let root = tempfile::tempdir().expect("temp dir");
     let frames: Vec<FrameRecord> = (0..3).map(|id| with_brake(id, 1.0)).collect();
-    let dir = write_scenario(
-        &root.path().join("Scenario_g"),
-        &ScenarioMeta::default(),
-        &frames,
-    );
+    let dir = ScenarioBuilder::new()
+        .frames(frames)
+        .write(&root.path().join("Scenario_g"));
     save_text(&dir.join("ANOMALY/ANOMALY_1.csv"), "brake 1.0\n");
     let labels = Scenario::open(&dir).expect("opens").frame_labels().clone();
     assert_eq!(labels.source, LabelSource::AnomalyBrake);
@@ -208,11 +208,9 @@ fn unreadable_anomaly_files_are_noted_and_count_as_normal() {
 fn no_source_means_all_frames_normal() {
     let root = tempfile::tempdir().expect("temp dir");
     let frames: Vec<FrameRecord> = (0..3).map(rgb_only).collect();
-    let dir = write_scenario(
-        &root.path().join("Scenario_h"),
-        &ScenarioMeta::default(),
-        &frames,
-    );
+    let dir = ScenarioBuilder::new()
+        .frames(frames)
+        .write(&root.path().join("Scenario_h"));
     let labels = Scenario::open(&dir).expect("opens").frame_labels().clone();
     assert_eq!(labels.source, LabelSource::None);
     assert_eq!(labels.flags, vec![false; 3]);
@@ -248,11 +246,9 @@ fn boxes_are_derived_per_instance_id_for_vehicles_only() {
         semantic: Some(semantic),
         ..rgb_only(0)
     };
-    let dir = write_scenario(
-        &root.path().join("Scenario_i"),
-        &ScenarioMeta::default(),
-        &[frame],
-    );
+    let dir = ScenarioBuilder::new()
+        .frames([frame])
+        .write(&root.path().join("Scenario_i"));
     let scenario = Scenario::open(&dir).expect("opens");
     assert_eq!(scenario.box_source(), &BoxSource::InstanceImages);
     let boxes = scenario.boxes(0).expect("derived");

@@ -4,14 +4,14 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::support::scenario::ScenarioBuilder;
 use crate::support::sequence::{
-    H, W, rgb_frame, rgb_only, save_gray, save_rgb, save_text, semantic_with_block, write_scenario,
+    H, W, rgb_frame, rgb_only, save_gray, save_rgb, save_text, semantic_with_block,
 };
 use image::{Rgb, RgbImage};
 use vadscope::sequence::discovery::LayoutKind;
 use vadscope::sequence::{
-    AnomalyType, FrameId, LabelSource, Modality, Scenario, ScenarioMeta, Weather,
-    discover_scenarios, inspect,
+    AnomalyType, FrameId, LabelSource, Modality, Scenario, Weather, discover_scenarios, inspect,
 };
 
 const UUID: &str = "ef183332-0f4e-4d3c-9d7e-123456789abc";
@@ -172,11 +172,9 @@ fn generator_layout_maps_sensor_folders_by_type_prefix() {
 fn discovery_skips_configuration_folder_and_stray_files() {
     let root = tempfile::tempdir().expect("temp dir");
     let generator = generator_dataset(root.path());
-    let benchmark = write_scenario(
-        &root.path().join("Scenario_0bench"),
-        &ScenarioMeta::default(),
-        &[rgb_only(0)],
-    );
+    let benchmark = ScenarioBuilder::new()
+        .frames([rgb_only(0)])
+        .write(&root.path().join("Scenario_0bench"));
     std::fs::create_dir_all(root.path().join("not_a_scenario")).expect("mkdir");
 
     let found = discover_scenarios(root.path()).expect("discovers");
@@ -228,11 +226,9 @@ fn inspect_reports_every_scenario_and_the_ones_that_fail() {
     let root = tempfile::tempdir().expect("temp dir");
     generator_dataset(root.path());
     let frames: Vec<_> = (0..3).map(rgb_only).collect();
-    write_scenario(
-        &root.path().join("Scenario_bench"),
-        &ScenarioMeta::default(),
-        &frames,
-    );
+    ScenarioBuilder::new()
+        .frames(frames)
+        .write(&root.path().join("Scenario_bench"));
     std::fs::create_dir_all(root.path().join("Scenario_empty")).expect("mkdir");
 
     let report = inspect(root.path()).expect("inspects");

@@ -1,8 +1,9 @@
 //! Malformed input: every problem gives an error (or a validation entry) that names the file
 //! and the problem, and nothing panics.
 
+use crate::support::scenario::ScenarioBuilder;
 use crate::support::sequence::{
-    H, W, assert_names, rgb_frame, rgb_only, save_gray, save_rgb, save_text, write_scenario,
+    H, W, assert_names, rgb_frame, rgb_only, save_gray, save_rgb, save_text,
 };
 use image::{GrayImage, ImageBuffer, Luma, RgbImage};
 use vadscope::sequence::{FlowField, FrameId, FrameRecord, Modality, Scenario, ScenarioMeta};
@@ -10,11 +11,9 @@ use vadscope::sequence::{FlowField, FrameId, FrameRecord, Modality, Scenario, Sc
 fn scenario_of(frames: usize) -> (tempfile::TempDir, std::path::PathBuf) {
     let root = tempfile::tempdir().expect("temp dir");
     let records: Vec<FrameRecord> = (0..frames as u64).map(rgb_only).collect();
-    let dir = write_scenario(
-        &root.path().join("Scenario_m"),
-        &ScenarioMeta::default(),
-        &records,
-    );
+    let dir = ScenarioBuilder::new()
+        .frames(records)
+        .write(&root.path().join("Scenario_m"));
     (root, dir)
 }
 
@@ -162,11 +161,9 @@ fn missing_frames_gaps_and_orphans_are_reported() {
             ..rgb_only(id)
         })
         .collect();
-    let dir = write_scenario(
-        &root.path().join("Scenario_gaps"),
-        &ScenarioMeta::default(),
-        &frames,
-    );
+    let dir = ScenarioBuilder::new()
+        .frames(frames)
+        .write(&root.path().join("Scenario_gaps"));
     save_gray(
         &dir.join("SEMANTIC_IMG/SEMANTIC_IMG_3.png"),
         &GrayImage::new(W, H),
@@ -218,11 +215,9 @@ fn broken_flow_files_name_file_and_problem() {
             ..rgb_only(id)
         })
         .collect();
-    let dir = write_scenario(
-        &root.path().join("Scenario_flow"),
-        &ScenarioMeta::default(),
-        &frames,
-    );
+    let dir = ScenarioBuilder::new()
+        .frames(frames)
+        .write(&root.path().join("Scenario_flow"));
     let flow_dir = dir.join("OPTICAL_FLOW");
     std::fs::remove_file(flow_dir.join("OPTICAL_FLOW_1.png")).expect("rm");
     std::fs::write(
@@ -311,11 +306,9 @@ fn wrong_pixel_layouts_are_rejected_by_reader_and_validation() {
 #[test]
 fn broken_metadata_and_stray_files_are_notes_not_failures() {
     let root = tempfile::tempdir().expect("temp dir");
-    let dir = write_scenario(
-        &root.path().join("Scenario_1234"),
-        &ScenarioMeta::default(),
-        &[rgb_only(0), rgb_only(5)],
-    );
+    let dir = ScenarioBuilder::new()
+        .frames([rgb_only(0), rgb_only(5)])
+        .write(&root.path().join("Scenario_1234"));
     save_text(&dir.join("scenario.json"), "{\"domain\": \"moon\"");
     save_text(
         &root

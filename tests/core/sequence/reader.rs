@@ -1,9 +1,8 @@
 //! Writer → reader round trips through `Scenario`: every modality, boxes, labels, metadata,
 //! key-value CSVs, semantic L and palette encodings, and the bounded frame cache.
 
-use crate::support::sequence::{
-    H, W, rgb_frame, rgb_only, save_rgb, semantic_with_block, write_scenario,
-};
+use crate::support::scenario::ScenarioBuilder;
+use crate::support::sequence::{H, W, rgb_frame, rgb_only, save_rgb, semantic_with_block};
 use image::{Luma, Rgb, RgbImage};
 use vadscope::sequence::images::SemanticEncoding;
 use vadscope::sequence::palette::{self, colourise};
@@ -26,6 +25,8 @@ fn full_frame(id: u64) -> FrameRecord {
             Rgb([1, 0, 0])
         }
     });
+    // Every field spelled out, so that a new modality does not compile here until the round
+    // trip covers it.
     FrameRecord {
         id: FrameId(id),
         rgb: rgb_frame(id),
@@ -79,7 +80,10 @@ fn meta() -> ScenarioMeta {
 fn every_modality_round_trips_through_scenario() {
     let root = tempfile::tempdir().expect("temp dir");
     let frames: Vec<FrameRecord> = (0..4).map(full_frame).collect();
-    let dir = write_scenario(&root.path().join("Scenario_rt"), &meta(), &frames);
+    let dir = ScenarioBuilder::new()
+        .meta(meta())
+        .frames(frames.clone())
+        .write(&root.path().join("Scenario_rt"));
     let scenario = Scenario::open(&dir).expect("opens");
 
     assert_eq!(scenario.len(), 4);
@@ -153,11 +157,9 @@ fn every_modality_round_trips_through_scenario() {
 #[test]
 fn detections_are_read_from_their_own_folder() {
     let root = tempfile::tempdir().expect("temp dir");
-    let dir = write_scenario(
-        &root.path().join("Scenario_det"),
-        &ScenarioMeta::default(),
-        &[rgb_only(0)],
-    );
+    let dir = ScenarioBuilder::new()
+        .frames([rgb_only(0)])
+        .write(&root.path().join("Scenario_det"));
     crate::support::sequence::save_text(
         &dir.join("BBOX_2D_DET/boxes.csv"),
         "frame,track_id,x1,y1,x2,y2,class,score,anomalous\n0,3,1,1,4,4,14,0.5,1\n",
@@ -174,11 +176,9 @@ fn detections_are_read_from_their_own_folder() {
 #[test]
 fn palette_semantic_images_map_back_to_ids_and_anomaly_colours() {
     let root = tempfile::tempdir().expect("temp dir");
-    let dir = write_scenario(
-        &root.path().join("Scenario_pal"),
-        &ScenarioMeta::default(),
-        &[rgb_only(0), rgb_only(1), rgb_only(2)],
-    );
+    let dir = ScenarioBuilder::new()
+        .frames([rgb_only(0), rgb_only(1), rgb_only(2)])
+        .write(&root.path().join("Scenario_pal"));
     let mut ids = semantic_with_block(14);
     ids.put_pixel(0, 0, Luma([11]));
     save_rgb(
@@ -229,11 +229,9 @@ fn palette_semantic_images_map_back_to_ids_and_anomaly_colours() {
 fn frame_cache_stays_within_its_byte_budget() {
     let root = tempfile::tempdir().expect("temp dir");
     let frames: Vec<FrameRecord> = (0..20).map(rgb_only).collect();
-    let dir = write_scenario(
-        &root.path().join("Scenario_cache"),
-        &ScenarioMeta::default(),
-        &frames,
-    );
+    let dir = ScenarioBuilder::new()
+        .frames(frames)
+        .write(&root.path().join("Scenario_cache"));
     let frame_bytes = (3 * W * H) as usize;
     let options = ScenarioOptions {
         cache_budget_bytes: 3 * frame_bytes,
@@ -262,21 +260,17 @@ fn frame_cache_stays_within_its_byte_budget() {
 #[test]
 fn cache_dir_is_inside_the_scenario_or_falls_back_per_user() {
     let root = tempfile::tempdir().expect("temp dir");
-    let dir = write_scenario(
-        &root.path().join("Scenario_cd"),
-        &ScenarioMeta::default(),
-        &[rgb_only(0)],
-    );
+    let dir = ScenarioBuilder::new()
+        .frames([rgb_only(0)])
+        .write(&root.path().join("Scenario_cd"));
     let scenario = Scenario::open(&dir).expect("opens");
     let cache = scenario.cache_dir().expect("cache dir");
     assert_eq!(cache, dir.join(".vadscope"));
     assert!(cache.is_dir());
 
-    let blocked = write_scenario(
-        &root.path().join("Scenario_ro"),
-        &ScenarioMeta::default(),
-        &[rgb_only(0)],
-    );
+    let blocked = ScenarioBuilder::new()
+        .frames([rgb_only(0)])
+        .write(&root.path().join("Scenario_ro"));
     // A file where the folder should be makes `.vadscope/` impossible to create, as a
     // read-only scenario would (tests may run as root, which ignores permissions).
     std::fs::write(blocked.join(".vadscope"), b"").expect("write blocker");
@@ -297,11 +291,9 @@ fn cache_dir_is_inside_the_scenario_or_falls_back_per_user() {
 #[test]
 fn index_out_of_range_is_an_error_not_a_panic() {
     let root = tempfile::tempdir().expect("temp dir");
-    let dir = write_scenario(
-        &root.path().join("Scenario_oob"),
-        &ScenarioMeta::default(),
-        &[rgb_only(0)],
-    );
+    let dir = ScenarioBuilder::new()
+        .frames([rgb_only(0)])
+        .write(&root.path().join("Scenario_oob"));
     let scenario = Scenario::open(&dir).expect("opens");
     let message = scenario.rgb(5).expect_err("out of range").to_string();
     assert!(

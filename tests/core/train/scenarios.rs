@@ -7,18 +7,16 @@ use std::path::{Path, PathBuf};
 
 use image::RgbImage;
 
+use crate::support::scenario::ScenarioBuilder;
 use vadscope::model::{BoxFilter, ModelConfig};
-use vadscope::sequence::{
-    BoxRecord, FlowField, FrameId, FrameRecord, ScenarioMeta, ScenarioWriter,
-};
+use vadscope::sequence::{BoxRecord, FlowField, FrameId, FrameRecord};
 use vadscope::train::scenarios::{CubeExtraction, cubes_from_scenarios, scenario_folders};
 
 /// An 8-frame scenario: frame k is a gradient whose blue channel is 30·k; the flow stored at
 /// frame k ≥ 1 is (k, 0.5); one normal box per frame, plus an anomalous one in frame 5, and
 /// frame 4 labelled anomalous.
 fn write_scenario(dir: &Path) -> PathBuf {
-    let writer = ScenarioWriter::create(dir, &ScenarioMeta::default()).expect("writer");
-    for k in 0..8u64 {
+    let frame = |k: u64| {
         let rgb = RgbImage::from_fn(48, 40, |x, y| {
             image::Rgb([x as u8 * 4, y as u8 * 5, 30 * k as u8])
         });
@@ -45,21 +43,14 @@ fn write_scenario(dir: &Path) -> PathBuf {
         if k == 5 {
             boxes.push(bbox(2, true));
         }
-        let record = FrameRecord {
-            id: FrameId(k),
-            rgb,
-            semantic: None,
-            instance: None,
-            depth_m: None,
+        FrameRecord {
             flow,
-            action: None,
-            anomaly: None,
             boxes,
             anomalous: Some(k == 4),
-        };
-        writer.write_frame(&record).expect("frame");
-    }
-    writer.finish().expect("finish")
+            ..FrameRecord::new(FrameId(k), rgb)
+        }
+    };
+    ScenarioBuilder::new().frames((0..8).map(frame)).write(dir)
 }
 
 #[test]
