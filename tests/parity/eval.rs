@@ -43,18 +43,28 @@ fn close(name: &str, got: f64, want: f64) {
     );
 }
 
+/// [`close`] for each `(name, got, field)`, against the number `want[field]`; the message
+/// names it `{prefix}{name}`.
+fn close_fields(prefix: &str, want: &Value, checks: &[(&str, f64, &str)]) {
+    for &(name, got, field) in checks {
+        close(
+            &format!("{prefix}{name}"),
+            got,
+            want[field].as_f64().unwrap(),
+        );
+    }
+}
+
 fn check_metrics(name: &str, scores: &[f64], labels: &[bool], want: &Value) {
     let curve = RocCurve::compute(scores, labels).unwrap();
     let m = curve.metrics();
-    close(
-        &format!("{name} auroc"),
-        m.auroc,
-        want["auroc"].as_f64().unwrap(),
-    );
-    close(
-        &format!("{name} AP"),
-        m.average_precision,
-        want["average_precision"].as_f64().unwrap(),
+    close_fields(
+        &format!("{name} "),
+        want,
+        &[
+            ("auroc", m.auroc, "auroc"),
+            ("AP", m.average_precision, "average_precision"),
+        ],
     );
     for (key, c) in [
         ("roc_full", curve.clone()),
@@ -67,31 +77,17 @@ fn check_metrics(name: &str, scores: &[f64], labels: &[bool], want: &Value) {
             "{name} {key} point count"
         );
         let first = c.first_reaching_tpr(0.95);
-        close(
-            &format!("{name} {key} fpr95"),
-            c.fpr(first),
-            roc["fpr_at_first_tpr_ge_095"].as_f64().unwrap(),
-        );
-        close(
-            &format!("{name} {key} tpr@first"),
-            c.tpr(first),
-            roc["tpr_at_first"].as_f64().unwrap(),
-        );
-        close(
-            &format!("{name} {key} thr@first"),
-            c.points[first].threshold,
-            roc["threshold_at_first"].as_f64().unwrap(),
-        );
         let closest = c.closest_to_tpr(0.95);
-        close(
-            &format!("{name} {key} fpr95 closest"),
-            c.fpr(closest),
-            roc["fpr_at_tpr_closest_095"].as_f64().unwrap(),
-        );
-        close(
-            &format!("{name} {key} tpr@closest"),
-            c.tpr(closest),
-            roc["tpr_at_closest"].as_f64().unwrap(),
+        close_fields(
+            &format!("{name} {key} "),
+            roc,
+            &[
+                ("fpr95", c.fpr(first), "fpr_at_first_tpr_ge_095"),
+                ("tpr@first", c.tpr(first), "tpr_at_first"),
+                ("thr@first", c.points[first].threshold, "threshold_at_first"),
+                ("fpr95 closest", c.fpr(closest), "fpr_at_tpr_closest_095"),
+                ("tpr@closest", c.tpr(closest), "tpr_at_closest"),
+            ],
         );
     }
     close(
@@ -186,10 +182,16 @@ fn pixel_level_metrics_and_robust_scaling_match_numpy() {
 
     let global = &px["robust_scale_global"];
     let stats = RobustStats::of(&scores).unwrap();
-    close("median", stats.median, global["median"].as_f64().unwrap());
-    close("q25", stats.q25, global["q25"].as_f64().unwrap());
-    close("q75", stats.q75, global["q75"].as_f64().unwrap());
-    close("iqr", stats.iqr(), global["iqr"].as_f64().unwrap());
+    close_fields(
+        "",
+        global,
+        &[
+            ("median", stats.median, "median"),
+            ("q25", stats.q25, "q25"),
+            ("q75", stats.q75, "q75"),
+            ("iqr", stats.iqr(), "iqr"),
+        ],
+    );
     for (g, w) in scores
         .iter()
         .map(|&s| stats.scale(s))
@@ -205,8 +207,11 @@ fn pixel_level_metrics_and_robust_scaling_match_numpy() {
     {
         let s = floats(&m["scores"]);
         let st = RobustStats::of(&s).unwrap();
-        close("map median", st.median, want["median"].as_f64().unwrap());
-        close("map iqr", st.iqr(), want["iqr"].as_f64().unwrap());
+        close_fields(
+            "map ",
+            want,
+            &[("median", st.median, "median"), ("iqr", st.iqr(), "iqr")],
+        );
         let scaled: Vec<f64> = s.iter().map(|&v| st.scale(v)).collect();
         for (g, w) in scaled.iter().zip(floats(&want["scaled"])) {
             close("map scaled", *g, w);
@@ -227,10 +232,16 @@ fn z_scores_use_population_std() {
     let z = &fx["zscore_example"];
     let r = MeanStd::of(&floats(&z["S_r_train"])).unwrap();
     let p = MeanStd::of(&floats(&z["S_p_train"])).unwrap();
-    close("mean_r", r.mean, z["mean_r"].as_f64().unwrap());
-    close("std_r", r.std, z["std_r_ddof0"].as_f64().unwrap());
-    close("mean_p", p.mean, z["mean_p"].as_f64().unwrap());
-    close("std_p", p.std, z["std_p_ddof0"].as_f64().unwrap());
+    close_fields(
+        "",
+        z,
+        &[
+            ("mean_r", r.mean, "mean_r"),
+            ("std_r", r.std, "std_r_ddof0"),
+            ("mean_p", p.mean, "mean_p"),
+            ("std_p", p.std, "std_p_ddof0"),
+        ],
+    );
     let (wr, wp) = (z["w_r"].as_f64().unwrap(), z["w_p"].as_f64().unwrap());
     let sr = floats(&z["S_r_test"]);
     let sp = floats(&z["S_p_test"]);

@@ -129,44 +129,42 @@ fn assert_rel(name: &str, ours: Tensor<1>, reference: f64) {
     assert!(rel <= 1e-5, "{name}: {v} vs {reference} (rel {rel})");
 }
 
+/// [`assert_close`] for each `(name, ours)`, against the fixture tensor of the same name.
+fn assert_outputs<const D: usize>(fx: &mut Fixtures, outputs: &[(&str, &Tensor<D>)]) {
+    for &(name, ours) in outputs {
+        assert_close(name, ours.clone(), fx.tensor(name));
+    }
+}
+
+/// [`assert_rel`] for each `(name, loss)`, against the fixture scalar of the same name.
+fn assert_losses(fx: &mut Fixtures, losses: &[(&str, &Tensor<1>)]) {
+    for &(name, ours) in losses {
+        assert_rel(name, ours.clone(), fx.scalar(name));
+    }
+}
+
 /// Checks the outputs of one HF²-VAD test-mode pass against the fixtures.
 fn check_hf2vad_outputs(fx: &mut Fixtures, out: &Hf2VadOutput) {
-    assert_close(
-        "hf2vad.of_recon",
-        out.of_recon.clone(),
-        fx.tensor("hf2vad.of_recon"),
-    );
-    assert_close(
-        "hf2vad.frame_pred",
-        out.cvae.frame_pred.clone(),
-        fx.tensor("hf2vad.frame_pred"),
+    let cvae = &out.cvae;
+    assert_outputs(
+        fx,
+        &[
+            ("hf2vad.of_recon", &out.of_recon),
+            ("hf2vad.frame_pred", &cvae.frame_pred),
+            ("hf2vad.q_mean_4x4", &cvae.q_means[0]),
+            ("hf2vad.p_mean_4x4", &cvae.p_means[0]),
+            ("hf2vad.q_mean_8x8", &cvae.q_means[1]),
+            ("hf2vad.p_mean_8x8", &cvae.p_means[1]),
+            ("vunet.f_phi.s4_2", &cvae.f_phi_last),
+            ("vunet.e_theta.s4_2", &cvae.e_theta_last),
+            ("vunet.bottleneck_out", &cvae.bottleneck_out),
+        ],
     );
     for (i, ours) in out.attention.iter().enumerate() {
         let name = format!("hf2vad.att_weight{}", i + 1);
         let reference: Tensor<3> = fx.tensor(&name);
         assert_close(&name, ours.clone(), reference.reshape([16, 16]));
     }
-    for (i, scale) in ["4x4", "8x8"].into_iter().enumerate() {
-        let q = format!("hf2vad.q_mean_{scale}");
-        let p = format!("hf2vad.p_mean_{scale}");
-        assert_close(&q, out.cvae.q_means[i].clone(), fx.tensor(&q));
-        assert_close(&p, out.cvae.p_means[i].clone(), fx.tensor(&p));
-    }
-    assert_close(
-        "vunet.f_phi.s4_2",
-        out.cvae.f_phi_last.clone(),
-        fx.tensor("vunet.f_phi.s4_2"),
-    );
-    assert_close(
-        "vunet.e_theta.s4_2",
-        out.cvae.e_theta_last.clone(),
-        fx.tensor("vunet.e_theta.s4_2"),
-    );
-    assert_close(
-        "vunet.bottleneck_out",
-        out.cvae.bottleneck_out.clone(),
-        fx.tensor("vunet.bottleneck_out"),
-    );
 
     let flows: Tensor<4> = fx.tensor("input.flows");
     let target = fx.frames().narrow(1, 12, 3);
@@ -193,37 +191,18 @@ fn check_stage2_and_3_losses(fx: &mut Fixtures, out: &Hf2VadOutput) {
     let target = fx.frames().narrow(1, 12, 3);
     let s3 = stage3_loss(out, flows, target, &w);
     let s2 = &s3.cvae;
-    assert_rel(
-        "s2.loss_kl_4x4",
-        s2.kl_scales[0].clone(),
-        fx.scalar("s2.loss_kl_4x4"),
-    );
-    assert_rel(
-        "s2.loss_kl_8x8",
-        s2.kl_scales[1].clone(),
-        fx.scalar("s2.loss_kl_8x8"),
-    );
-    assert_rel("s2.loss_kl", s2.kl.clone(), fx.scalar("s2.loss_kl"));
-    assert_rel(
-        "s2.loss_frame",
-        s2.frame.clone(),
-        fx.scalar("s2.loss_frame"),
-    );
-    assert_rel("s2.loss_grad", s2.grad.clone(), fx.scalar("s2.loss_grad"));
-    assert_rel(
-        "s2.loss_total",
-        s2.total.clone(),
-        fx.scalar("s2.loss_total"),
-    );
-    assert_rel(
-        "s3.loss_recon",
-        s3.recon.clone(),
-        fx.scalar("s3.loss_recon"),
-    );
-    assert_rel(
-        "s3.loss_sparsity",
-        s3.sparsity.clone(),
-        fx.scalar("s3.loss_sparsity"),
+    assert_losses(
+        fx,
+        &[
+            ("s2.loss_kl_4x4", &s2.kl_scales[0]),
+            ("s2.loss_kl_8x8", &s2.kl_scales[1]),
+            ("s2.loss_kl", &s2.kl),
+            ("s2.loss_frame", &s2.frame),
+            ("s2.loss_grad", &s2.grad),
+            ("s2.loss_total", &s2.total),
+            ("s3.loss_recon", &s3.recon),
+            ("s3.loss_sparsity", &s3.sparsity),
+        ],
     );
 }
 
@@ -235,11 +214,9 @@ fn memae_alone_reproduces_reference_features_and_attention() {
     let net = fx.memae();
     let flows: Tensor<4> = fx.tensor("input.flows");
     let out = net.forward(flows.narrow(1, 6, 2));
-    assert_close("memae.x3", out.x3.clone(), fx.tensor("memae.x3"));
-    assert_close(
-        "memae.up3_out",
-        out.up3_out.clone(),
-        fx.tensor("memae.up3_out"),
+    assert_outputs(
+        &mut fx,
+        &[("memae.x3", &out.x3), ("memae.up3_out", &out.up3_out)],
     );
     for i in 0..3 {
         let sm = format!("memae.att_softmax{}", i + 1);
@@ -312,15 +289,12 @@ fn injected_posterior_noise_reproduces_reference_train_mode() {
         eps_8: fx.tensor("s2_eps.eps_8x8"),
     };
     let out = model.forward(fx.frames(), fx.tensor("input.flows"), &latents, None);
-    assert_close(
-        "s2_eps.frame_pred",
-        out.cvae.frame_pred.clone(),
-        fx.tensor("s2_eps.frame_pred"),
-    );
-    assert_close(
-        "s2_eps.p_mean_4x4",
-        out.cvae.p_means[0].clone(),
-        fx.tensor("s2_eps.p_mean_4x4"),
+    assert_outputs(
+        &mut fx,
+        &[
+            ("s2_eps.frame_pred", &out.cvae.frame_pred),
+            ("s2_eps.p_mean_4x4", &out.cvae.p_means[0]),
+        ],
     );
     assert_close(
         "q_mean_4x4 unchanged by noise",
@@ -329,17 +303,14 @@ fn injected_posterior_noise_reproduces_reference_train_mode() {
     );
     let target = fx.frames().narrow(1, 12, 3);
     let s2 = stage2_loss(&out, target, &LossWeights::default());
-    assert_rel("s2_eps.loss_kl", s2.kl, fx.scalar("s2_eps.loss_kl"));
-    assert_rel(
-        "s2_eps.loss_frame",
-        s2.frame,
-        fx.scalar("s2_eps.loss_frame"),
-    );
-    assert_rel("s2_eps.loss_grad", s2.grad, fx.scalar("s2_eps.loss_grad"));
-    assert_rel(
-        "s2_eps.loss_total",
-        s2.total,
-        fx.scalar("s2_eps.loss_total"),
+    assert_losses(
+        &mut fx,
+        &[
+            ("s2_eps.loss_kl", &s2.kl),
+            ("s2_eps.loss_frame", &s2.frame),
+            ("s2_eps.loss_grad", &s2.grad),
+            ("s2_eps.loss_total", &s2.total),
+        ],
     );
 }
 
@@ -387,30 +358,19 @@ fn stage1_train_mode_reproduces_losses_gradients_and_running_stats() {
     let flows: Tensor<4> = fx.tensor("input.flows");
     let input = flows.narrow(1, 6, 2).detach().require_grad();
     let out = net.forward(input.clone());
-    assert_close(
-        "s1_train.recon",
-        out.recon.clone(),
-        fx.tensor("s1_train.recon"),
-    );
+    assert_outputs(&mut fx, &[("s1_train.recon", &out.recon)]);
     for i in 0..3 {
         let name = format!("s1_train.att_weight{}", i + 1);
         assert_close(&name, out.attention[i].clone(), fx.tensor(&name));
     }
     let loss = stage1_loss(&out, input.clone().detach(), &LossWeights::default());
-    assert_rel(
-        "s1_train.loss_recon",
-        loss.recon.clone(),
-        fx.scalar("s1_train.loss_recon"),
-    );
-    assert_rel(
-        "s1_train.loss_entropy",
-        loss.entropy.clone(),
-        fx.scalar("s1_train.loss_entropy"),
-    );
-    assert_rel(
-        "s1_train.loss_total",
-        loss.total.clone(),
-        fx.scalar("s1_train.loss_total"),
+    assert_losses(
+        &mut fx,
+        &[
+            ("s1_train.loss_recon", &loss.recon),
+            ("s1_train.loss_entropy", &loss.entropy),
+            ("s1_train.loss_total", &loss.total),
+        ],
     );
     let grads = loss.total.backward();
     assert_close(
@@ -443,20 +403,13 @@ fn stage1_eval_mode_reproduces_losses_and_gradients() {
     let input = flows.narrow(1, 6, 2);
     let out = net.forward(input.clone());
     let loss = stage1_loss(&out, input, &LossWeights::default());
-    assert_rel(
-        "s1_eval.loss_recon",
-        loss.recon.clone(),
-        fx.scalar("s1_eval.loss_recon"),
-    );
-    assert_rel(
-        "s1_eval.loss_entropy",
-        loss.entropy.clone(),
-        fx.scalar("s1_eval.loss_entropy"),
-    );
-    assert_rel(
-        "s1_eval.loss_total",
-        loss.total.clone(),
-        fx.scalar("s1_eval.loss_total"),
+    assert_losses(
+        &mut fx,
+        &[
+            ("s1_eval.loss_recon", &loss.recon),
+            ("s1_eval.loss_entropy", &loss.entropy),
+            ("s1_eval.loss_total", &loss.total),
+        ],
     );
     let grads = loss.total.backward();
     check_param_grads(&mut fx, "s1_eval", param_grads(&net, &grads));
