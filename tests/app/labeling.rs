@@ -5,13 +5,14 @@
 //! deleted, the reference switch makes the analyst's labels the reference of the metrics,
 //! and a damaged label file is reported and set aside.
 
-use crate::support::app::{drag, generate_dataset, setup, viewer_harness};
 use egui::{Key, Modifiers};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use vadscope::annotate::{Editor, Interval, LabelSet, Origin, Step, read_journal};
 use vadscope::app::{Action, AppState, Dataset, LogLevel, Reference, ViewSettings, ViewerApp};
 use vadscope::sequence::Scenario;
+
+use crate::support::app::{drag, generate_dataset, setup, viewer_harness};
 
 /// The harness with the labeling mode on.
 fn labeling(dir: &std::path::Path) -> Harness<'static, ViewerApp> {

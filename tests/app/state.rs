@@ -3,15 +3,16 @@
 //! job on generated scenarios with a tiny model, and malformed data ending up as errors in
 //! the state, never as a panic.
 
-use crate::support::app::{
-    ANOMALY, FRAMES, generate_dataset, scored_state, setup, state_of_tables, table, tiny_checkpoint,
-};
 use vadscope::app::{
     Action, AppState, BACKGROUND_FRAME_CACHE, CURRENT_FRAME_CACHE, FailureKind, LogLevel, Playback,
     ScoreStatus, ThresholdMode, ViewSettings,
 };
 use vadscope::score::{FusionWeights, ModelKey, ScoreRequest};
 use vadscope::sequence::Scenario;
+
+use crate::support::app::{
+    ANOMALY, FRAMES, generate_dataset, scored_state, setup, state_of_tables, table, tiny_checkpoint,
+};
 
 /// Labels of `frames` frames, anomalous in `window`.
 fn labels(frames: usize, window: std::ops::RangeInclusive<usize>) -> Vec<bool> {

@@ -5,13 +5,14 @@
 //! writing PNG, GIF and `scores.csv`, and a malformed scenario shown as an error instead of
 //! a crash.
 
-use crate::support::app::{drag, viewer_harness};
 use egui::accesskit::Role;
 use egui::{Key, Modifiers};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use vadscope::app::{ThresholdMode, ViewMode, ViewerApp};
 use vadscope::render::SCORES_HEADER;
+
+use crate::support::app::{drag, viewer_harness};
 
 fn harness(dir: &std::path::Path) -> Harness<'static, ViewerApp> {
     viewer_harness(dir)

@@ -5,12 +5,13 @@
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-use crate::support::cli::{scenario_folders, text, tiny_generate_args, vadscope};
 use burn::tensor::Device;
 use vadscope::eval::MeanStd;
 use vadscope::model::{
     CheckpointMeta, Hf2Vad, ModelConfig, NoiseRng, PixelStats, TrainingStats, save_checkpoint,
 };
+
+use crate::support::cli::{scenario_folders, text, tiny_generate_args, vadscope};
 
 /// Runs `vadscope COMMAND SCENARIO --out OUT [--model MODEL] EXTRA...`.
 fn on_scenario(

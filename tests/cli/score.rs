@@ -5,7 +5,6 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::support::cli::{text, vadscope};
 use burn::tensor::Device;
 use serde_json::Value;
 use vadscope::model::{
@@ -13,6 +12,9 @@ use vadscope::model::{
     save_checkpoint,
 };
 use vadscope::score::ScoreCache;
+
+use crate::support::cli::{text, vadscope};
+use crate::support::model::tiny_config;
 
 /// Frames per generated scenario: the generator's shortest braking scenario (the lead
 /// vehicle brakes to a standstill inside it, so it has anomalous frames).
@@ -53,16 +55,7 @@ fn pixel_stats(median: f64, q25: f64, q75: f64) -> PixelStats {
 
 /// A random-init checkpoint of a tiny model (16×16 cubes) with plausible statistics.
 fn tiny_checkpoint(dir: &Path) -> PathBuf {
-    let config = ModelConfig {
-        preset: "test-tiny".into(),
-        patch_size: 16,
-        feature_root: 4,
-        num_slots: 8,
-        shrink_thres: 1.0 / 8.0,
-        nf_start: 8,
-        nf_max: 16,
-        ..ModelConfig::paper()
-    };
+    let config = tiny_config(ModelConfig::paper());
     let model = Hf2Vad::new(&config, &Device::flex(), &mut NoiseRng::new(7)).expect("model");
     let meta = CheckpointMeta {
         config,

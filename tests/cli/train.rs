@@ -4,7 +4,6 @@
 //! input (no scenarios, an unwritable output folder, a corrupt checkpoint, a second run in a
 //! used folder) fails with a message that names the problem.
 
-use crate::support::cli::{text, vadscope};
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -12,6 +11,9 @@ use std::process::{Command, Output, Stdio};
 use burn::tensor::Device;
 use vadscope::model::{Detector, ModelConfig, load_checkpoint};
 use vadscope::train::CubeSet;
+
+use crate::support::cli::{text, vadscope};
+use crate::support::model::tiny_config;
 
 fn path(p: &Path) -> &str {
     p.to_str().expect("utf-8 temp path")
@@ -40,16 +42,7 @@ fn generate(dir: &Path) {
 /// Writes a tiny model config (16×16 cubes, 4 base features, 8 memory slots) beside `dir`'s
 /// other files and returns its path.
 fn tiny_model(dir: &Path) -> PathBuf {
-    let config = ModelConfig {
-        preset: "test-tiny".into(),
-        patch_size: 16,
-        feature_root: 4,
-        num_slots: 8,
-        shrink_thres: 1.0 / 8.0,
-        nf_start: 8,
-        nf_max: 16,
-        ..ModelConfig::compact()
-    };
+    let config = tiny_config(ModelConfig::compact());
     let file = dir.join("tiny_model.json");
     std::fs::write(&file, serde_json::to_string(&config).unwrap()).unwrap();
     file

@@ -10,6 +10,7 @@ pub mod annotate;
 pub mod app;
 pub mod cli;
 pub mod flow;
+pub mod model;
 pub mod render;
 pub mod scenario;
 pub mod score;

@@ -2,9 +2,10 @@
 //! parameters and priors; plus the guarantees that hold for any input (thread-count
 //! independence, grey/RGB equivalence, temporal prior handling).
 
-use crate::support::flow::{Texture, flow_from_fn, region_epe, render};
 use image::{GrayImage, RgbImage};
 use vadscope::flow::{DisFlow, DisParams, DisPreset, FlowError, FlowField};
+
+use crate::support::flow::{Texture, flow_from_fn, region_epe, render};
 
 fn textured_pair(width: u32, height: u32, shift: [f64; 2]) -> (GrayImage, GrayImage) {
     let tex = Texture::new(21, 128.0);

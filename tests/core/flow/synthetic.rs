@@ -1,8 +1,9 @@
 //! DIS flow on synthetic pairs with exactly known motion: sub-pixel shift, zoom about a
 //! point, a moving box on a moving background, and a brightness change.
 
-use crate::support::flow::{Texture, flow_from_fn, interior_epe, render};
 use vadscope::flow::{DisFlow, DisPreset, PixelBox, box_endpoint_error, endpoint_error};
+
+use crate::support::flow::{Texture, flow_from_fn, interior_epe, render};
 
 const W: u32 = 192;
 const H: u32 = 144;

@@ -7,13 +7,14 @@
 
 use std::path::PathBuf;
 
-use crate::support::render::{flow, frame, heatmap, maps, mask, objects, series};
 use image::RgbaImage;
 use vadscope::render::{
     self, Caption, FlowViewInput, FlowViewOptions, FrameViewInput, FrameViewOptions, PredViewInput,
     PredViewOptions, ScoreLabels, TimelineInput, TimelineOptions,
 };
 use vadscope::score::FusionWeights;
+
+use crate::support::render::{flow, frame, heatmap, maps, mask, objects, series};
 
 const SIZE: (u32, u32) = (192, 128);
 

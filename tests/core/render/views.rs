@@ -3,7 +3,6 @@
 //! the cursor at its frame, a single spike surviving decimation); colormaps; the timeline's
 //! hit-testing.
 
-use crate::support::render::{boxes, flow, frame, heatmap, maps, mask, objects, series};
 use image::RgbaImage;
 use vadscope::render::{
     self, Caption, Colormap, DashboardInput, DashboardOptions, FlowViewInput, FlowViewOptions,
@@ -11,6 +10,8 @@ use vadscope::render::{
     TimelineLayout, TimelineOptions,
 };
 use vadscope::score::FusionWeights;
+
+use crate::support::render::{boxes, flow, frame, heatmap, maps, mask, objects, series};
 
 const SIZES: [(u32, u32); 5] = [(1, 1), (8, 8), (192, 128), (1600, 1000), (2600, 1700)];
 

@@ -3,7 +3,6 @@
 
 use std::path::Path;
 
-use crate::support::scenario::{SQUARE, square_box, square_frame, square_scenario, square_x};
 use vadscope::score::detections::{FrameRef, parse_coco, parse_mot, parse_yolo};
 use vadscope::score::motion::{blur_frame, motion_boxes};
 use vadscope::score::{
@@ -11,6 +10,8 @@ use vadscope::score::{
     MotionParams, box_iou, match_boxes, match_scenario,
 };
 use vadscope::sequence::{BoxRecord, FrameId, Scenario};
+
+use crate::support::scenario::{SQUARE, square_box, square_frame, square_scenario, square_x};
 
 fn bbox(x1: f32, y1: f32, x2: f32, y2: f32) -> BoxRecord {
     BoxRecord {

@@ -3,13 +3,14 @@
 
 use std::path::Path;
 
-use crate::support::scenario::square_scenario;
-use crate::support::score::{object, table};
 use vadscope::score::cache::{frame_ids_hash, map_stride};
 use vadscope::score::{
     CacheKey, CacheWriter, ModelKey, ObjectMaps, ScoreCache, ScoreTable, write_cache,
 };
 use vadscope::sequence::Scenario;
+
+use crate::support::scenario::square_scenario;
+use crate::support::score::{object, table};
 
 /// Maps whose values identify the object (f16-exact for the reconstructed flow).
 fn maps_of(k: usize) -> ObjectMaps {

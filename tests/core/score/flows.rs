@@ -3,10 +3,11 @@
 
 use std::sync::Arc;
 
-use crate::support::scenario::{ScenarioBuilder, square_box, square_record};
 use vadscope::flow::{DisPreset, FlowField};
 use vadscope::score::{FlowProvider, FlowSource, ModelKey};
 use vadscope::sequence::{FrameRecord, Scenario};
+
+use crate::support::scenario::{ScenarioBuilder, square_box, square_record};
 
 /// Five frames of the moving square; a stored flow (u = 4 everywhere) at frames 1 and 2 only.
 fn scenario(dir: &std::path::Path) -> Scenario {

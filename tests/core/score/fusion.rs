@@ -2,12 +2,13 @@
 //! frames, metric preparation, overlapping boxes, boxes at the image border, the reference's
 //! per-batch mode and grids of other sizes.
 
-use crate::support::score::{constant_maps, object, table};
 use vadscope::eval::median_filter;
 use vadscope::score::{
     FrameFusion, FusionWeights, Heatmap, HeatmapScratch, ObjectMaps, PixelReferenceMode,
     compose_heatmap, frame_scores, metric_frames,
 };
+
+use crate::support::score::{constant_maps, object, table};
 
 const SIZE: (u32, u32) = (64, 48);
 

@@ -6,8 +6,6 @@ use std::cell::Cell;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use crate::support::scenario::{ScenarioBuilder, square_box, square_record, square_scenario};
-use crate::support::score::{object, table, training_stats};
 use burn::tensor::Device;
 use image::{GrayImage, Luma};
 use vadscope::eval::{RocCurve, ScoreMetrics};
@@ -24,6 +22,9 @@ use vadscope::score::{
 use vadscope::sequence::{
     BoxRecord, Domain, FrameId, FrameRecord, Scenario, ScenarioMeta, Weather,
 };
+
+use crate::support::scenario::{ScenarioBuilder, square_box, square_record, square_scenario};
+use crate::support::score::{object, table, training_stats};
 
 const P: usize = 4;
 const T: usize = 2;

@@ -1,13 +1,14 @@
 //! Frame-level anomaly flags in their order of preference (frame_labels.csv, semantic
 //! images, scenario window, ANOMALY brake, none) and boxes derived from instance images.
 
-use crate::support::scenario::ScenarioBuilder;
-use crate::support::sequence::{H, W, rgb_only, save_text, semantic_with_block};
 use image::{GrayImage, Luma, Rgb, RgbImage};
 use vadscope::sequence::{
     AnomalyType, BoxSource, FrameId, FrameRecord, FrameWindow, KeyValues, LabelSource, Scenario,
     ScenarioMeta,
 };
+
+use crate::support::scenario::ScenarioBuilder;
+use crate::support::sequence::{H, W, rgb_only, save_text, semantic_with_block};
 
 fn with_semantic(id: u64, class: u8) -> FrameRecord {
     FrameRecord {

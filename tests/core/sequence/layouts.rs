@@ -4,14 +4,15 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::support::scenario::ScenarioBuilder;
-use crate::support::sequence::{
-    H, W, rgb_frame, rgb_only, save_gray, save_rgb, save_text, semantic_with_block,
-};
 use image::{Rgb, RgbImage};
 use vadscope::sequence::discovery::LayoutKind;
 use vadscope::sequence::{
     AnomalyType, FrameId, LabelSource, Modality, Scenario, Weather, discover_scenarios, inspect,
+};
+
+use crate::support::scenario::ScenarioBuilder;
+use crate::support::sequence::{
+    H, W, rgb_frame, rgb_only, save_gray, save_rgb, save_text, semantic_with_block,
 };
 
 const UUID: &str = "ef183332-0f4e-4d3c-9d7e-123456789abc";

@@ -1,12 +1,13 @@
 //! Malformed input: every problem gives an error (or a validation entry) that names the file
 //! and the problem, and nothing panics.
 
+use image::{GrayImage, ImageBuffer, Luma, RgbImage};
+use vadscope::sequence::{FlowField, FrameId, FrameRecord, Modality, Scenario, ScenarioMeta};
+
 use crate::support::scenario::ScenarioBuilder;
 use crate::support::sequence::{
     H, W, assert_names, rgb_frame, rgb_only, save_gray, save_rgb, save_text,
 };
-use image::{GrayImage, ImageBuffer, Luma, RgbImage};
-use vadscope::sequence::{FlowField, FrameId, FrameRecord, Modality, Scenario, ScenarioMeta};
 
 fn scenario_of(frames: usize) -> (tempfile::TempDir, std::path::PathBuf) {
     let root = tempfile::tempdir().expect("temp dir");

@@ -1,8 +1,6 @@
 //! Writer → reader round trips through `Scenario`: every modality, boxes, labels, metadata,
 //! key-value CSVs, semantic L and palette encodings, and the bounded frame cache.
 
-use crate::support::scenario::ScenarioBuilder;
-use crate::support::sequence::{H, W, rgb_frame, rgb_only, save_rgb, semantic_with_block};
 use image::{Luma, Rgb, RgbImage};
 use vadscope::sequence::images::SemanticEncoding;
 use vadscope::sequence::palette::{self, colourise};
@@ -10,6 +8,9 @@ use vadscope::sequence::{
     AnomalyType, BoxRecord, BoxSource, Domain, FlowField, FrameId, FrameRecord, FrameWindow,
     KeyValues, LabelSource, Modality, Scenario, ScenarioMeta, ScenarioOptions, Weather,
 };
+
+use crate::support::scenario::ScenarioBuilder;
+use crate::support::sequence::{H, W, rgb_frame, rgb_only, save_rgb, semantic_with_block};
 
 fn full_frame(id: u64) -> FrameRecord {
     let mut action = KeyValues::default();

@@ -7,10 +7,11 @@ use std::path::{Path, PathBuf};
 
 use image::RgbImage;
 
-use crate::support::scenario::ScenarioBuilder;
 use vadscope::model::{BoxFilter, ModelConfig};
 use vadscope::sequence::{BoxRecord, FlowField, FrameId, FrameRecord};
 use vadscope::train::scenarios::{CubeExtraction, cubes_from_scenarios, scenario_folders};
+
+use crate::support::scenario::ScenarioBuilder;
 
 /// An 8-frame scenario: frame k is a gradient whose blue channel is 30·k; the flow stored at
 /// frame k ≥ 1 is (k, 0.5); one normal box per frame, plus an anomalous one in frame 5, and

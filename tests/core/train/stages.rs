@@ -10,20 +10,9 @@ use vadscope::train::{
     CubeSet, LrSchedule, StageConfig, TrainConfig, TrainEvent, TrainReport, train,
 };
 
-const P: usize = 16;
+use crate::support::model::tiny_config;
 
-fn tiny_config() -> ModelConfig {
-    ModelConfig {
-        preset: "test-tiny".into(),
-        patch_size: P,
-        feature_root: 4,
-        num_slots: 8,
-        shrink_thres: 1.0 / 8.0,
-        nf_start: 8,
-        nf_max: 16,
-        ..ModelConfig::paper()
-    }
-}
+const P: usize = 16;
 
 /// Cubes of a sinusoidal texture moving by a per-cube constant velocity, with the matching
 /// constant flow plus a little noise; 4 scenarios of 6 cubes.
@@ -82,7 +71,7 @@ fn tiny_training(epochs: usize) -> TrainConfig {
 
 fn run(dir: &Path, epochs: usize, events: &mut Vec<TrainEvent>) -> TrainReport {
     train(
-        &tiny_config(),
+        &tiny_config(ModelConfig::paper()),
         &tiny_training(epochs),
         &synthetic_cubes(),
         dir,
@@ -120,7 +109,7 @@ fn three_stages_reduce_their_losses_and_the_checkpoint_reproduces_the_model() {
     // The checkpoint carries config and statistics, and reloading it reproduces the
     // statistics exactly (same outputs on the same training cubes).
     let meta = read_checkpoint_meta(&report.checkpoint).expect("meta");
-    assert_eq!(meta.config, tiny_config());
+    assert_eq!(meta.config, tiny_config(ModelConfig::paper()));
     assert_eq!(meta.stats, Some(report.stats));
     // Same batch size as the statistics pass, so the arithmetic is the same.
     let detector = Detector::from_checkpoint(&report.checkpoint)
@@ -142,7 +131,7 @@ fn three_stages_reduce_their_losses_and_the_checkpoint_reproduces_the_model() {
 fn jointly_reconstructed_flows_train_in_every_stage() {
     let config = ModelConfig {
         joint_flows: true,
-        ..tiny_config()
+        ..tiny_config(ModelConfig::paper())
     };
     let dir = tempfile::tempdir().expect("temp dir");
     let mut events = Vec::new();
@@ -184,7 +173,7 @@ fn interrupted_training_resumes_to_the_same_model() {
     // Interrupt right after stage 2's first epoch was checkpointed.
     let interrupted = catch_unwind(AssertUnwindSafe(|| {
         train(
-            &tiny_config(),
+            &tiny_config(ModelConfig::paper()),
             &tiny_training(2),
             &synthetic_cubes(),
             resumed.path(),
@@ -228,7 +217,7 @@ fn interrupted_training_resumes_to_the_same_model() {
 
     // A different configuration in the same folder is refused.
     let err = train(
-        &tiny_config(),
+        &tiny_config(ModelConfig::paper()),
         &tiny_training(3),
         &synthetic_cubes(),
         resumed.path(),
