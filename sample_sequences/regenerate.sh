@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerates the bundled sample scenarios exactly (tests/sample_sequences.rs checks that the
+# Regenerates the bundled sample scenarios exactly (tests/synth/sample_sequences.rs checks that the
 # committed files are what these commands produce). Depth and flow are left out to keep the
 # bundle small; vadscope computes flow with its DIS engine when a scenario has none.
 set -euo pipefail
