@@ -23,7 +23,7 @@ fn generate(out: &Path, frames: u32, domain: &str, size: &str) -> PathBuf {
         "--size",
         size,
         "--seed",
-        "11",
+        "12",
     ]);
     assert!(generated.status.success(), "{}", text(&generated.stderr));
     scenario_folders(out).remove(0)
