@@ -268,6 +268,57 @@ fn eval_prints_the_rows_asked_for() {
 }
 
 #[test]
+fn baselines_are_scored_on_the_same_frames_beside_the_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = tiny_checkpoint(dir.path());
+    let data = dataset(dir.path());
+    let json = succeed(&[
+        "eval",
+        data.to_str().unwrap(),
+        "--model",
+        model.to_str().unwrap(),
+        "--by",
+        "none",
+        "--baselines",
+        "--format",
+        "json",
+    ]);
+    let report: Value = serde_json::from_str(&json).expect("eval --format json is JSON");
+    let model_row = &rows(&report, "table2")[0];
+    let baselines = rows(&report, "baselines");
+    // The scenarios were generated without ACTION files: no ego-deceleration row.
+    let names: Vec<&str> = baselines
+        .iter()
+        .map(|r| r["box_source"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "baseline: flow energy (ground truth)",
+            "baseline: looming (ground truth)",
+            "baseline: frame difference (ground truth)"
+        ]
+    );
+    for row in baselines {
+        assert_eq!(
+            row["frames"], model_row["frames"],
+            "same frames as the model"
+        );
+        assert_eq!(row["anomalous_frames"], model_row["anomalous_frames"]);
+        let auroc = row["metrics"]["auroc"].as_f64().expect("AUROC");
+        assert!((0.0..=1.0).contains(&auroc), "{auroc}");
+    }
+    // The top-object count covers the braking scenario's anomaly frames with objects.
+    let top = &report["top_object"][0];
+    assert_eq!(top[0], "ground truth");
+    let (hits, frames) = (top[1]["hits"].as_u64(), top[1]["frames"].as_u64());
+    assert!(
+        frames.unwrap() > 0 && hits.unwrap() <= frames.unwrap(),
+        "{top}"
+    );
+}
+
+#[test]
 fn sweep_gives_one_row_per_grid_point() {
     let dir = tempfile::tempdir().unwrap();
     let model = tiny_checkpoint(dir.path());
