@@ -10,10 +10,9 @@ work="${1:-/tmp/vadscope-bundled}"
 cd "$here/../.."
 cargo build --release --quiet
 vadscope=target/release/vadscope
-"$vadscope" generate --out "$work/data" --preset train --count 48 --frames 120 --seed 0 \
-  --omit depth,semantic,instance
+"$vadscope" generate --out "$work/data" --preset train --count 48 --frames 24 --size 384x256 \
+  --seed 0 --omit depth,semantic,instance
 "$vadscope" train --data "$work/data" --out "$work/run" --preset compact --seed 0 \
-  --box-filter driving --flow-units patch --joint-flows --frame-stride 3 \
-  --memae-epochs 5 --cvae-epochs 2 --finetune-epochs 0 --batch 32 \
-  --memae-lr 1e-3 --cvae-lr 1e-3
+  --frame-stride 8 --memae-epochs 10 --cvae-epochs 3 --finetune-epochs 1 --batch 32 \
+  --memae-lr 1e-3 --cvae-lr 1e-3 --finetune-lr 1e-4
 cp "$work/run/model.safetensors" "$here/hf2vad_ad_compact.safetensors"
