@@ -6,9 +6,11 @@
 
 pub mod annotate;
 pub mod app;
+pub mod atomic_file;
 pub mod eval;
 pub mod export;
 pub mod flow;
+pub mod fnv;
 pub mod model;
 pub mod render;
 pub mod score;

@@ -57,6 +57,12 @@ pub enum AnnotateError {
     },
 }
 
+impl From<crate::atomic_file::WriteError> for AnnotateError {
+    fn from(e: crate::atomic_file::WriteError) -> Self {
+        Self::io(e.path, e.source)
+    }
+}
+
 impl AnnotateError {
     /// Wraps an I/O error with the path it happened on.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {

@@ -40,15 +40,8 @@ struct Body {
     edit: Edit,
 }
 
-/// FNV-1a, 32 bit.
-fn fnv1a32(bytes: &[u8]) -> u32 {
-    bytes.iter().fold(0x811c_9dc5, |hash, &b| {
-        (hash ^ u32::from(b)).wrapping_mul(0x0100_0193)
-    })
-}
-
 fn checksum(seq: u64, json: &str) -> u32 {
-    fnv1a32(format!("{seq} {json}").as_bytes())
+    crate::fnv::fnv1a32(format!("{seq} {json}").as_bytes())
 }
 
 /// The journal line of `record`, newline included.

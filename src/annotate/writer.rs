@@ -12,6 +12,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::thread::JoinHandle;
 
+use crate::atomic_file::write_atomically;
+
 use super::AnnotateError;
 use super::document::encode_document;
 use super::journal::{JournalRecord, encode_record};
@@ -232,23 +234,4 @@ impl WriterState {
         self.error = None;
         Ok(())
     }
-}
-
-/// Writes `bytes` to `path` atomically: a temporary file beside it, fsync, rename over
-/// `path`, fsync of the folder.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), AnnotateError> {
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map_or_else(|| "labels".into(), |n| n.to_string_lossy().into_owned());
-    let temporary = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let mut file = File::create(&temporary).map_err(|e| AnnotateError::io(&temporary, e))?;
-    file.write_all(bytes)
-        .and_then(|()| file.sync_all())
-        .map_err(|e| AnnotateError::io(&temporary, e))?;
-    drop(file);
-    std::fs::rename(&temporary, path).map_err(|e| AnnotateError::io(path, e))?;
-    File::open(dir)
-        .and_then(|d| d.sync_all())
-        .map_err(|e| AnnotateError::io(dir, e))
 }

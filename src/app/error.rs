@@ -54,6 +54,12 @@ pub enum AppError {
     Window(String),
 }
 
+impl From<crate::atomic_file::WriteError> for AppError {
+    fn from(e: crate::atomic_file::WriteError) -> Self {
+        Self::io(e.path, e.source)
+    }
+}
+
 impl AppError {
     /// An I/O error on `path`.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {

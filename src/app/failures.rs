@@ -203,7 +203,7 @@ impl FailureTags {
         })
     }
 
-    /// Writes the tags to `path` atomically (temporary file, then rename).
+    /// Writes the tags to `path` atomically.
     pub fn save(&self, path: &Path) -> Result<(), AppError> {
         let records: Vec<TagRecord> = self
             .tags
@@ -221,14 +221,13 @@ impl FailureTags {
     }
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same folder and a rename.
+/// Writes `bytes` to `path` atomically ([`crate::atomic_file`]), creating its folder
+/// first: the viewer's files live in folders that may not exist yet.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), AppError> {
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).map_err(|e| AppError::io(dir, e))?;
     }
-    let temporary = path.with_extension("tmp");
-    std::fs::write(&temporary, bytes).map_err(|e| AppError::io(&temporary, e))?;
-    std::fs::rename(&temporary, path).map_err(|e| AppError::io(path, e))
+    Ok(crate::atomic_file::write_atomically(path, bytes)?)
 }
 
 /// One row of the failure-case CSV.

@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 use super::dis::DisFlow;
 use super::error::FlowError;
 use super::params::DisPreset;
+use crate::atomic_file::remove_stale_temporaries;
 use crate::sequence::flow_file::{encode_kitti_png, probe_flow, read_kitti_png};
 use crate::sequence::layout::benchmark_file_name;
 use crate::sequence::{FlowField, Modality, Scenario};
@@ -234,70 +235,12 @@ pub fn fill_flow_cache(
     })
 }
 
-/// Suffix of the temporary files a run writes before renaming them into place.
-const TEMP_SUFFIX: &str = ".tmp";
-
-/// Writes `flow` to `path` through a flushed temporary file in the same folder and a
-/// rename, so `path` is either absent or complete.
+/// Stores `flow` at `path` as a KITTI PNG, atomically ([`crate::atomic_file`]): `path`
+/// is either absent or complete.
 fn write_atomically(path: &Path, flow: &FlowField) -> Result<(), FlowError> {
-    use std::io::Write;
     let bytes = encode_kitti_png(path, flow)?;
-    let file_name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let temp = path.with_file_name(format!(".{file_name}.{}{TEMP_SUFFIX}", std::process::id()));
-    let io_error = |p: &Path, e: std::io::Error| FlowError::File {
-        path: p.to_path_buf(),
-        problem: e.to_string(),
-    };
-    let mut file = std::fs::File::create(&temp).map_err(|e| io_error(&temp, e))?;
-    file.write_all(&bytes)
-        .and_then(|()| file.sync_all())
-        .map_err(|e| io_error(&temp, e))?;
-    drop(file);
-    std::fs::rename(&temp, path).map_err(|e| {
-        // The temporary file is useless without the rename; removing it is best effort.
-        let _ = std::fs::remove_file(&temp);
-        io_error(path, e)
+    crate::atomic_file::write_atomically(path, &bytes).map_err(|e| FlowError::File {
+        path: e.path,
+        problem: e.source.to_string(),
     })
-}
-
-/// Removes temporary files left in `folder` by runs that were killed. A temporary file
-/// carries the id of the process writing it; those of live processes are left alone (on
-/// systems without `/proc`, nothing is removed).
-fn remove_stale_temporaries(folder: &Path) {
-    let Ok(entries) = std::fs::read_dir(folder) else {
-        return;
-    };
-    for entry in entries.flatten() {
-        let name = entry.file_name().to_string_lossy().into_owned();
-        let Some(pid) = temporary_owner(&name) else {
-            continue;
-        };
-        let owner_alive = Path::new("/proc").join(pid.to_string()).exists();
-        if Path::new("/proc/self").exists() && !owner_alive {
-            // A leftover that cannot be removed is harmless: it is ignored and overwritten
-            // by nobody.
-            let _ = std::fs::remove_file(entry.path());
-        }
-    }
-}
-
-/// The process id in a temporary file name `.<name>.<pid>.tmp`.
-fn temporary_owner(name: &str) -> Option<u32> {
-    let stem = name.strip_prefix('.')?.strip_suffix(TEMP_SUFFIX)?;
-    stem.rsplit('.').next()?.parse().ok()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn temporary_names_carry_their_owner() {
-        assert_eq!(temporary_owner(".OPTICAL_FLOW_7.png.4242.tmp"), Some(4242));
-        assert_eq!(temporary_owner("OPTICAL_FLOW_7.png"), None);
-        assert_eq!(temporary_owner(".OPTICAL_FLOW_7.png.tmp"), None);
-    }
 }

@@ -15,12 +15,14 @@
 
 use std::collections::HashMap;
 use std::fs::File;
-use std::io::{Read, Write};
+use std::io::Read;
 use std::path::Path;
 
 use burn::module::Module;
 use burn::store::{ModuleSnapshot, SafetensorsStore};
 use burn::tensor::Device;
+
+use crate::atomic_file::write_atomically;
 
 use super::config::ModelConfig;
 use super::error::ModelError;
@@ -85,7 +87,8 @@ pub fn save_checkpoint(
             format!("unexpected safetensors from burn-store: {reason}"),
         )
     })?;
-    replace_file(path, &bytes)
+    // Atomic, so a crash leaves either the old checkpoint or the new one.
+    write_atomically(path, &bytes).map_err(|e| ModelError::save(e.path, e.source))
 }
 
 /// A safetensors file re-laid out canonically: the header's keys (and those of
@@ -137,23 +140,6 @@ fn canonical_bytes(bytes: &[u8]) -> Result<Vec<u8>, String> {
     out.extend_from_slice(&header_bytes);
     out.extend_from_slice(&out_data);
     Ok(out)
-}
-
-/// Writes `bytes` to a scratch file beside `path`, flushes them to disk and renames the
-/// scratch file to `path`, so a crash leaves either the old checkpoint or the new one,
-/// never half of one.
-fn replace_file(path: &Path, bytes: &[u8]) -> Result<(), ModelError> {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(".partial");
-    let scratch = path.with_file_name(name);
-    let written = File::create(&scratch)
-        .and_then(|mut file| file.write_all(bytes).and_then(|()| file.sync_all()))
-        .map_err(|e| ModelError::save(&scratch, e))
-        .and_then(|()| std::fs::rename(&scratch, path).map_err(|e| ModelError::save(path, e)));
-    if written.is_err() {
-        let _ = std::fs::remove_file(&scratch);
-    }
-    written
 }
 
 /// The JSON header at the start of a safetensors stream and its length in bytes, leaving

@@ -40,17 +40,19 @@
 //! the frames they describe. The display-only reconstructed flow is f16 (native pixels,
 //! far below the f16 range) and the predicted patch 8-bit, as it would be shown.
 //!
-//! Files are written to a temporary name in the same folder, fsynced and renamed into
-//! place, so a crash never leaves a half-written cache under the real name.
+//! Files are written atomically ([`crate::atomic_file`]), so a crash never leaves a
+//! half-written cache under the real name.
 
 use std::fs::File;
-use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
+use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use serde::Serialize;
 
+use crate::atomic_file::AtomicFile;
 use crate::eval::RobustStats;
+use crate::fnv::{Fnv64, fnv1a64};
 use crate::model::{PixelStats, ScoreStats, TrainingStats};
 use crate::sequence::{FrameId, Scenario};
 
@@ -71,32 +73,6 @@ const PREAMBLE_LEN: u64 = 64;
 const FRAME_RECORD_LEN: usize = 16;
 const OBJECT_RECORD_LEN: usize = 48;
 const BATCH_RECORD_LEN: usize = 48;
-
-/// FNV-1a, 64 bit: stable across runs, platforms and Rust versions.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Fnv64(u64);
-
-impl Fnv64 {
-    pub(crate) fn new() -> Self {
-        Self(0xcbf2_9ce4_8422_2325)
-    }
-
-    pub(crate) fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-
-    pub(crate) fn finish(self) -> u64 {
-        self.0
-    }
-}
-
-fn fnv(bytes: &[u8]) -> u64 {
-    let mut h = Fnv64::new();
-    h.write(bytes);
-    h.finish()
-}
 
 /// The identity of a model's weights (a hash of its checkpoint file).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
@@ -787,11 +763,11 @@ fn decode_tables(
 }
 
 /// Streams a score cache to disk: maps object by object while scoring runs, the tables at
-/// the end. The temporary file is removed if the writer is dropped unfinished.
+/// the end, atomically ([`crate::atomic_file`]): the temporary file is removed if the
+/// writer is dropped unfinished.
 pub struct CacheWriter {
     path: PathBuf,
-    temp: PathBuf,
-    file: Option<BufWriter<File>>,
+    file: Option<AtomicFile>,
     patch: usize,
     checksums: Vec<u32>,
     block: Vec<u8>,
@@ -805,19 +781,12 @@ impl CacheWriter {
         }
         let dir = path.parent().unwrap_or(Path::new("."));
         std::fs::create_dir_all(dir).map_err(|e| ScoreError::io(dir, e))?;
-        let name = path
-            .file_name()
-            .map_or_else(|| "cache".into(), |n| n.to_string_lossy().into_owned());
-        let temp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-        let file = File::create(&temp).map_err(|e| ScoreError::io(&temp, e))?;
-        let mut writer = BufWriter::with_capacity(1 << 20, file);
-        writer
-            .write_all(&[0u8; PREAMBLE_LEN as usize])
-            .map_err(|e| ScoreError::io(&temp, e))?;
+        let mut file = AtomicFile::with_capacity(path, 1 << 20)?;
+        file.write_all(&[0u8; PREAMBLE_LEN as usize])
+            .map_err(|e| ScoreError::io(file.temporary_path(), e))?;
         Ok(Self {
             path: path.to_path_buf(),
-            temp,
-            file: Some(writer),
+            file: Some(file),
             patch,
             checksums: Vec::new(),
             block: Vec::with_capacity(map_stride(patch)),
@@ -830,13 +799,13 @@ impl CacheWriter {
             ScoreError::cache(&self.path, format!("object {}: {p}", self.checksums.len()))
         })?;
         encode_maps(maps, &mut self.block);
-        self.checksums.push(fnv(&self.block) as u32);
+        self.checksums.push(fnv1a64(&self.block) as u32);
         let file = self
             .file
             .as_mut()
             .ok_or_else(|| ScoreError::cache(&self.path, "writer already finished"))?;
         file.write_all(&self.block)
-            .map_err(|e| ScoreError::io(&self.temp, e))
+            .map_err(|e| ScoreError::io(file.temporary_path(), e))
     }
 
     /// Objects whose maps were appended so far.
@@ -867,13 +836,13 @@ impl CacheWriter {
             .validate()
             .map_err(|p| ScoreError::cache(&self.path, p))?;
         let tables = encode_tables(table, &self.checksums);
-        let mut writer = self
+        let mut file = self
             .file
             .take()
             .ok_or_else(|| ScoreError::cache(&self.path, "writer already finished"))?;
-        let temp = self.temp.clone();
+        let temp = file.temporary_path().to_path_buf();
         let io = |e| ScoreError::io(&temp, e);
-        writer.write_all(&tables).map_err(io)?;
+        file.write_all(&tables).map_err(io)?;
         let maps_len = (self.checksums.len() * map_stride(self.patch)) as u64;
         let mut preamble = Vec::with_capacity(PREAMBLE_LEN as usize);
         preamble.extend_from_slice(MAGIC);
@@ -883,33 +852,13 @@ impl CacheWriter {
         preamble.extend_from_slice(&PREAMBLE_LEN.to_le_bytes());
         preamble.extend_from_slice(&(PREAMBLE_LEN + maps_len).to_le_bytes());
         preamble.extend_from_slice(&(tables.len() as u64).to_le_bytes());
-        preamble.extend_from_slice(&fnv(&tables).to_le_bytes());
-        let checksum = fnv(&preamble);
+        preamble.extend_from_slice(&fnv1a64(&tables).to_le_bytes());
+        let checksum = fnv1a64(&preamble);
         preamble.extend_from_slice(&checksum.to_le_bytes());
-        let mut file = writer.into_inner().map_err(|e| io(e.into_error()))?;
         file.seek(SeekFrom::Start(0)).map_err(io)?;
         file.write_all(&preamble).map_err(io)?;
-        file.sync_all().map_err(io)?;
-        drop(file);
-        std::fs::rename(&self.temp, &self.path).map_err(|e| ScoreError::io(&self.path, e))?;
-        // Persist the rename itself; not every platform can open a folder, which only
-        // weakens durability, never correctness.
-        if let Some(dir) = self.path.parent()
-            && let Ok(d) = File::open(dir)
-        {
-            let _ = d.sync_all();
-        }
+        file.commit()?;
         Ok(self.path.clone())
-    }
-}
-
-impl Drop for CacheWriter {
-    fn drop(&mut self) {
-        if self.file.take().is_some() {
-            // Unfinished (error or cancel): the temporary file is useless; failing to
-            // delete it leaves a hidden file that the next run overwrites.
-            let _ = std::fs::remove_file(&self.temp);
-        }
     }
 }
 
@@ -987,7 +936,7 @@ impl ScoreCache {
                 ),
             ));
         }
-        if fnv(&pre[..56]) != u64_at(56) {
+        if fnv1a64(&pre[..56]) != u64_at(56) {
             return Err(ScoreError::cache(
                 path,
                 "header checksum mismatch (corrupt file)",
@@ -1023,7 +972,7 @@ impl ScoreCache {
         file.seek(SeekFrom::Start(tables_offset))
             .and_then(|_| file.read_exact(&mut tables))
             .map_err(|e| ScoreError::io(path, e))?;
-        if fnv(&tables) != u64_at(48) {
+        if fnv1a64(&tables) != u64_at(48) {
             return Err(ScoreError::cache(
                 path,
                 "table checksum mismatch (corrupt file)",
@@ -1161,7 +1110,7 @@ impl ScoreCache {
             .chunks_exact(stride)
             .enumerate()
             .map(|(k, block)| {
-                if fnv(block) as u32 != self.checksums[first + k] {
+                if fnv1a64(block) as u32 != self.checksums[first + k] {
                     return Err(ScoreError::cache(
                         &self.path,
                         format!(

@@ -458,7 +458,7 @@ impl DetectionFile {
     /// A short stable name for cache file names: format and a hash of the file contents and
     /// reading options, so a changed file gets a new cache.
     pub fn key(&self) -> Result<String, ScoreError> {
-        let mut hash = super::cache::Fnv64::new();
+        let mut hash = crate::fnv::Fnv64::new();
         let mut add_file = |p: &Path| -> Result<(), ScoreError> {
             hash.write(&std::fs::read(p).map_err(|e| ScoreError::io(p, e))?);
             Ok(())

@@ -86,6 +86,12 @@ pub enum ScoreError {
     },
 }
 
+impl From<crate::atomic_file::WriteError> for ScoreError {
+    fn from(e: crate::atomic_file::WriteError) -> Self {
+        Self::io(e.path, e.source)
+    }
+}
+
 impl ScoreError {
     /// Wraps an I/O error with the path it happened on.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {

@@ -39,7 +39,8 @@ pub fn resolve_cache_dir(
     );
     let key = format!(
         "{name}-{:016x}",
-        fnv1a64(absolute.to_string_lossy().as_bytes())
+        // FNV is stable across runs and Rust versions, so the folder does not move.
+        crate::fnv::fnv1a64(absolute.to_string_lossy().as_bytes())
     );
     let fallback = user_cache_base.join("scenarios").join(key);
     std::fs::create_dir_all(&fallback).map_err(|e| SequenceError::io(&fallback, e))?;
@@ -56,23 +57,4 @@ fn is_writable_dir(dir: &Path) -> bool {
     // The probe is only a test; failing to remove it leaves an empty hidden file behind.
     let _ = std::fs::remove_file(&probe);
     writable
-}
-
-/// FNV-1a, 64 bit: a hash that stays the same across runs and Rust versions, so the cache
-/// folder of a scenario does not move.
-fn fnv1a64(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |hash, &b| {
-        (hash ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn fnv_matches_reference_values() {
-        assert_eq!(fnv1a64(b""), 0xcbf2_9ce4_8422_2325);
-        assert_eq!(fnv1a64(b"a"), 0xaf63_dc4c_8601_ec8c);
-    }
 }

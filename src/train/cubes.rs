@@ -10,6 +10,7 @@ use std::path::Path;
 
 use serde_json::json;
 
+use crate::atomic_file::write_atomically;
 use crate::model::rng::NoiseRng;
 
 use super::error::TrainError;
@@ -185,9 +186,7 @@ impl CubeSet {
         bytes.extend_from_slice(&self.frames);
         bytes.extend(self.flows.iter().flat_map(|v| v.to_le_bytes()));
         bytes.extend(self.groups.iter().flat_map(|v| v.to_le_bytes()));
-        let scratch = path.with_extension("partial");
-        std::fs::write(&scratch, &bytes).map_err(|e| TrainError::io(&scratch, e))?;
-        std::fs::rename(&scratch, path).map_err(|e| TrainError::io(path, e))
+        Ok(write_atomically(path, &bytes)?)
     }
 
     /// Reads a set written by [`CubeSet::save`].

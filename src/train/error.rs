@@ -34,6 +34,12 @@ pub enum TrainError {
     Config(String),
 }
 
+impl From<crate::atomic_file::WriteError> for TrainError {
+    fn from(e: crate::atomic_file::WriteError) -> Self {
+        Self::io(e.path, e.source)
+    }
+}
+
 impl TrainError {
     /// An I/O error on `path`.
     pub fn io(path: impl Into<PathBuf>, source: impl Into<std::io::Error>) -> Self {

@@ -22,6 +22,7 @@ use burn::store::{BurnpackStore, ModuleSnapshot};
 use burn::tensor::{Device, Tensor};
 use serde::{Deserialize, Serialize};
 
+use crate::atomic_file::{write_atomically, write_atomically_with};
 use crate::model::inference::to_model_conventions;
 use crate::model::layers::tensor;
 use crate::model::losses::{stage1_loss, stage2_loss, stage3_loss};
@@ -352,7 +353,7 @@ fn load_model(model: &mut Hf2Vad, path: &Path) -> Result<(), TrainError> {
 }
 
 fn save_model(model: &Hf2Vad, path: &Path) -> Result<(), TrainError> {
-    replace_file(path, |scratch| {
+    write_atomically_with(path, |scratch| {
         // valid() folds pending BatchNorm running-stat updates in and keeps parameter ids.
         let mut store = BurnpackStore::from_file(scratch).overwrite(true);
         model
@@ -360,19 +361,6 @@ fn save_model(model: &Hf2Vad, path: &Path) -> Result<(), TrainError> {
             .save_into(&mut store)
             .map_err(|e| TrainError::file(scratch, e))
     })
-}
-
-/// Writes `path` through a scratch file renamed into place, so an interrupted run never
-/// leaves a half-written checkpoint behind. The scratch name keeps the `.bpk` extension,
-/// which burnpack would otherwise append.
-fn replace_file(
-    path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), TrainError>,
-) -> Result<(), TrainError> {
-    let stem = path.file_stem().unwrap_or_default().to_string_lossy();
-    let scratch = path.with_file_name(format!("{stem}.partial.bpk"));
-    write(&scratch)?;
-    std::fs::rename(&scratch, path).map_err(|e| TrainError::io(path, e))
 }
 
 fn read_state(dir: &Path) -> Result<Option<TrainState>, TrainError> {
@@ -388,10 +376,8 @@ fn read_state(dir: &Path) -> Result<Option<TrainState>, TrainError> {
 
 fn write_state(dir: &Path, state: &TrainState) -> Result<(), TrainError> {
     let path = dir.join(STATE);
-    let scratch = dir.join("state.json.partial");
     let text = serde_json::to_string_pretty(state).map_err(|e| TrainError::io(&path, e))?;
-    std::fs::write(&scratch, text).map_err(|e| TrainError::io(&scratch, e))?;
-    std::fs::rename(&scratch, &path).map_err(|e| TrainError::io(&path, e))
+    Ok(write_atomically(&path, text.as_bytes())?)
 }
 
 /// Scalar value of a loss tensor.
@@ -494,7 +480,7 @@ impl Context<'_> {
                 save_model(&model, &self.out_dir.join(best_file(stage)))?;
             }
             save_model(&model, &self.out_dir.join(LAST_MODEL))?;
-            replace_file(&self.out_dir.join(LAST_OPTIM), |scratch| {
+            write_atomically_with(&self.out_dir.join(LAST_OPTIM), |scratch| {
                 optim
                     .save(scratch)
                     .map_err(|e| TrainError::file(scratch, e))

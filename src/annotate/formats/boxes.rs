@@ -4,6 +4,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use crate::atomic_file::write_atomically;
 use crate::score::detections::DetectionTable;
 use crate::score::{DetectionFile, DetectionFormat, FrameNumbering};
 use crate::sequence::boxes::format_boxes;
@@ -13,7 +14,6 @@ use super::super::AnnotateError;
 use super::super::edit::Edit;
 use super::super::labels::{LabelSet, Origin};
 use super::super::tracks::{boxes_by_frame, tracks_from_boxes};
-use super::super::writer::write_atomically;
 use super::{ExportSummary, Import, LabelFormat};
 
 /// `BBOX_2D/boxes.csv` layout.

@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use crate::atomic_file::write_atomically;
 use crate::sequence::labels::{format_frame_labels, read_frame_labels};
 use crate::sequence::{FrameId, Scenario};
 
@@ -12,7 +13,6 @@ use super::super::edit::Edit;
 use super::super::ground_truth::{intervals_from_flags, scenario_class};
 use super::super::labels::{FailureTag, Interval, IntervalId, LabelSet, Origin, TagId};
 use super::super::lane::LabelLane;
-use super::super::writer::write_atomically;
 use super::{ExportSummary, Import};
 
 /// The header of the intervals CSV.
