@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use super::dis::check_flow_shape;
 use super::error::FlowError;
+use crate::box_crop::{crop_range, resize_crop, taps};
 use crate::sequence::FlowField;
 
 /// End-point error (Euclidean distance between estimated and true vectors) of a whole field.
@@ -81,36 +82,9 @@ impl From<&crate::sequence::BoxRecord> for PixelBox {
     }
 }
 
-/// The rows or columns HF²-VAD crops for an edge pair: `ceil(a) .. ceil(b)`, clipped to
-/// `0..len`.
-fn crop_range(a: f32, b: f32, len: u32) -> Option<(usize, usize)> {
-    if !(a.is_finite() && b.is_finite()) {
-        return None;
-    }
-    let start = a.ceil().clamp(0.0, len as f32) as usize;
-    let end = b.ceil().clamp(0.0, len as f32) as usize;
-    (end > start).then_some((start, end))
-}
-
-/// Source index pair and weight for bilinear resizing with pixel-centre alignment and
-/// clamped borders (OpenCV's `INTER_LINEAR` rule).
-fn linear_taps(dst: usize, src_len: usize, dst_len: usize) -> (usize, usize, f32) {
-    let scale = src_len as f32 / dst_len as f32;
-    let s = (dst as f32 + 0.5) * scale - 0.5;
-    let i0 = s.floor();
-    if i0 < 0.0 {
-        return (0, 0, 0.0);
-    }
-    let i0 = i0 as usize;
-    if i0 >= src_len - 1 {
-        return (src_len - 1, src_len - 1, 0.0);
-    }
-    (i0, i0 + 1, s - i0 as f32)
-}
-
 /// Crops `flow` to `bbox` and resizes the crop to `size × size` bilinearly without
-/// rescaling the values, exactly as HF²-VAD builds its motion inputs: the crop spans rows
-/// `ceil(y1) .. ceil(y2)` and columns `ceil(x1) .. ceil(x2)` (clipped to the field).
+/// rescaling the values, exactly as HF²-VAD builds its motion inputs
+/// ([`crate::box_crop`], the same crop the model's cubes take).
 ///
 /// The result is valid everywhere when `flow` has no mask; otherwise a resized pixel is
 /// valid when all source pixels it blends are.
@@ -128,36 +102,42 @@ pub fn crop_resize_flow(
         width: flow.width,
         height: flow.height,
     };
-    let (cx0, cx1) = crop_range(bbox.x1, bbox.x2, flow.width).ok_or_else(empty)?;
-    let (cy0, cy1) = crop_range(bbox.y1, bbox.y2, flow.height).ok_or_else(empty)?;
+    let xs = crop_range(bbox.x1, bbox.x2, flow.width).ok_or_else(empty)?;
+    let ys = crop_range(bbox.y1, bbox.y2, flow.height).ok_or_else(empty)?;
     if size == 0 {
         return Err(FlowError::InvalidParams {
             problem: "crop size must be at least 1".into(),
         });
     }
     let n = size as usize;
-    let (cw, ch) = (cx1 - cx0, cy1 - cy0);
-    let w = flow.width as usize;
-    let mut uv = Vec::with_capacity(2 * n * n);
-    let mut valid = flow.valid.as_ref().map(|_| Vec::with_capacity(n * n));
-    for dy in 0..n {
-        let (y0, y1, fy) = linear_taps(dy, ch, n);
-        for dx in 0..n {
-            let (x0, x1, fx) = linear_taps(dx, cw, n);
-            let taps = [
-                ((cy0 + y0) * w + cx0 + x0, (1.0 - fx) * (1.0 - fy)),
-                ((cy0 + y0) * w + cx0 + x1, fx * (1.0 - fy)),
-                ((cy0 + y1) * w + cx0 + x0, (1.0 - fx) * fy),
-                ((cy0 + y1) * w + cx0 + x1, fx * fy),
-            ];
-            for c in 0..2 {
-                uv.push(taps.iter().map(|&(i, wgt)| wgt * flow.uv[2 * i + c]).sum());
-            }
-            if let (Some(out), Some(mask)) = (valid.as_mut(), flow.valid.as_ref()) {
-                out.push(taps.iter().all(|&(i, wgt)| wgt == 0.0 || mask[i]));
+    let mut uv = vec![0f32; 2 * n * n];
+    resize_crop(
+        (xs, ys),
+        flow.width,
+        2,
+        n,
+        |i| flow.uv[i],
+        |c, y, x, v| uv[2 * (y * n + x) + c] = v,
+    );
+    let valid = flow.valid.as_ref().map(|mask| {
+        // A resized pixel is valid when every source pixel with a weight is.
+        let w = flow.width as usize;
+        let column_taps: Vec<_> = (0..n).map(|d| taps(d, xs.1 - xs.0, n)).collect();
+        let mut out = Vec::with_capacity(n * n);
+        for dy in 0..n {
+            let (ya, yb, wy) = taps(dy, ys.1 - ys.0, n);
+            let rows = [(ya, true), (yb, wy != 0.0)];
+            for &(xa, xb, wx) in &column_taps {
+                let columns = [(xa, true), (xb, wx != 0.0)];
+                out.push(rows.iter().filter(|r| r.1).all(|&(row, _)| {
+                    columns.iter().filter(|c| c.1).all(|&(column, _)| {
+                        mask[(ys.0 as usize + row) * w + xs.0 as usize + column]
+                    })
+                }));
             }
         }
-    }
+        out
+    });
     Ok(FlowField {
         width: size,
         height: size,

@@ -7,8 +7,8 @@
 //!   and the crop covers columns ⌈x1⌉…⌈x2⌉−1 and rows ⌈y1⌉…⌈y2⌉−1 (clamped to the image);
 //! * at the start of a scenario, indices before 0 repeat frame 0 (and its flow), and a
 //!   flow missing at frame 0 counts as zero motion (the reference's pair (0, 0));
-//! * resizing samples like OpenCV's `INTER_LINEAR` (half-pixel centres, edge clamping);
-//!   frames are rounded back to bytes as OpenCV does for 8-bit images.
+//! * resizing samples like OpenCV's `INTER_LINEAR` (half-pixel centres, edge clamping;
+//!   [`crate::box_crop`]); frames are rounded back to bytes as OpenCV does for 8-bit images.
 //!
 //! A flow field of another resolution than its frame is sampled with the box scaled to its
 //! grid and its values converted to frame pixels.
@@ -17,6 +17,7 @@ use std::sync::Arc;
 
 use image::RgbImage;
 
+use crate::box_crop::{Crop, crop_range, resize_crop};
 use crate::sequence::{BoxRecord, FlowField, Scenario};
 
 use super::config::{FlowUnits, ModelConfig};
@@ -76,67 +77,8 @@ pub fn flow_indices(index: usize, clip_hist: usize) -> Vec<usize> {
         .collect()
 }
 
-/// Pixel range [start, end) of a box edge pair after the reference's rounding, clamped to
-/// `0..size`.
-fn crop_range(lo: f32, hi: f32, size: u32) -> Option<(u32, u32)> {
-    if !(lo.is_finite() && hi.is_finite()) {
-        return None;
-    }
-    let start = lo.ceil().clamp(0.0, size as f32) as u32;
-    let end = hi.ceil().clamp(0.0, size as f32) as u32;
-    (end > start).then_some((start, end))
-}
-
-/// OpenCV `INTER_LINEAR` source position for output pixel `d` when resizing `len` → `out`:
-/// (left index, right index, weight of the right one).
-fn taps(d: usize, len: u32, out: usize) -> (usize, usize, f32) {
-    let scale = len as f64 / out as f64;
-    let f = (d as f64 + 0.5) * scale - 0.5;
-    let mut s = f.floor();
-    let mut w = f - s;
-    if s < 0.0 {
-        s = 0.0;
-        w = 0.0;
-    }
-    let last = (len - 1) as f64;
-    if s >= last {
-        s = last;
-        w = 0.0;
-    }
-    let s = s as usize;
-    (s, (s + 1).min(len as usize - 1), w as f32)
-}
-
-/// Bilinear resize of the crop `[x0, x1) × [y0, y1)` of an interleaved `channels`-channel
-/// image of `width` columns, read through `at(offset)`, into `out` planes of P×P.
-fn resize_crop(
-    crop: ((u32, u32), (u32, u32)),
-    width: u32,
-    channels: usize,
-    patch: usize,
-    at: impl Fn(usize) -> f32,
-    mut put: impl FnMut(usize, usize, usize, f32),
-) {
-    let ((x0, x1), (y0, y1)) = crop;
-    let xs: Vec<_> = (0..patch).map(|d| taps(d, x1 - x0, patch)).collect();
-    for dy in 0..patch {
-        let (ya, yb, wy) = taps(dy, y1 - y0, patch);
-        let row_a = (y0 as usize + ya) * width as usize;
-        let row_b = (y0 as usize + yb) * width as usize;
-        for (dx, &(xa, xb, wx)) in xs.iter().enumerate() {
-            let (ca, cb) = (x0 as usize + xa, x0 as usize + xb);
-            for c in 0..channels {
-                let p = |row: usize, col: usize| at((row + col) * channels + c);
-                let top = p(row_a, ca) * (1.0 - wx) + p(row_a, cb) * wx;
-                let bottom = p(row_b, ca) * (1.0 - wx) + p(row_b, cb) * wx;
-                put(c, dy, dx, top * (1.0 - wy) + bottom * wy);
-            }
-        }
-    }
-}
-
 /// Cube crop of `frame` into `out` (3 planes of P×P), rounding to bytes.
-fn crop_frame(frame: &RgbImage, crop: ((u32, u32), (u32, u32)), patch: usize, out: &mut [u8]) {
+fn crop_frame(frame: &RgbImage, crop: Crop, patch: usize, out: &mut [u8]) {
     let raw = frame.as_raw();
     resize_crop(
         crop,
@@ -150,13 +92,7 @@ fn crop_frame(frame: &RgbImage, crop: ((u32, u32), (u32, u32)), patch: usize, ou
 
 /// Cube crop of `flow` into `out` (2 planes of P×P); `scale` converts its values to frame
 /// pixels.
-fn crop_flow(
-    flow: &FlowField,
-    crop: ((u32, u32), (u32, u32)),
-    patch: usize,
-    scale: [f32; 2],
-    out: &mut [f32],
-) {
+fn crop_flow(flow: &FlowField, crop: Crop, patch: usize, scale: [f32; 2], out: &mut [f32]) {
     let uv = &flow.uv;
     resize_crop(
         crop,
@@ -441,15 +377,5 @@ mod tests {
         assert_eq!(cubes[0].flow_scale, [0.25, 0.5]);
         assert_eq!(cubes[0].flows[0], 2.0 * 0.25, "u in patch pixels");
         assert_eq!(cubes[0].flows[64], 4.0 * 0.5, "v in patch pixels");
-    }
-
-    #[test]
-    fn downscaling_matches_opencv_sampling_positions() {
-        // 4 → 2: output pixel 0 samples source 0.5 (half-way between pixels 0 and 1).
-        assert_eq!(taps(0, 4, 2), (0, 1, 0.5));
-        assert_eq!(taps(1, 4, 2), (2, 3, 0.5));
-        // 2 → 4: the first output pixel clamps to the left edge.
-        assert_eq!(taps(0, 2, 4), (0, 1, 0.0));
-        assert_eq!(taps(3, 2, 4), (1, 1, 0.0));
     }
 }
