@@ -174,17 +174,12 @@ fn camera_of_sensor(sensor: &Value) -> Option<CameraIntrinsics> {
         .and_then(|l| l.get(2))
         .and_then(Value::as_f64)
         .unwrap_or(1.8) as f32;
-    let f = width as f32 / (2.0 * (fov_deg.to_radians() / 2.0).tan());
-    Some(CameraIntrinsics {
+    Some(CameraIntrinsics::from_fov(
         width,
         height,
         fov_deg,
-        fx: f,
-        fy: f,
-        cx: width as f32 / 2.0,
-        cy: height as f32 / 2.0,
         mount_height_m,
-    })
+    ))
 }
 
 #[cfg(test)]

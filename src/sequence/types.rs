@@ -165,7 +165,13 @@ pub struct CameraIntrinsics {
 impl CameraIntrinsics {
     /// AnoVox's camera: FOV 90°, principal point at the image centre, mounted at 1.8 m.
     pub fn anovox(width: u32, height: u32) -> Self {
-        let fov_deg: f32 = 90.0;
+        Self::from_fov(width, height, 90.0, 1.8)
+    }
+
+    /// A camera of `width`×`height` pixels with a horizontal field of view of `fov_deg`
+    /// degrees, square pixels, the principal point at the image centre (CARLA's camera),
+    /// mounted `mount_height_m` above the road.
+    pub fn from_fov(width: u32, height: u32, fov_deg: f32, mount_height_m: f32) -> Self {
         let f = width as f32 / (2.0 * (fov_deg.to_radians() / 2.0).tan());
         Self {
             width,
@@ -175,7 +181,7 @@ impl CameraIntrinsics {
             fy: f,
             cx: width as f32 / 2.0,
             cy: height as f32 / 2.0,
-            mount_height_m: 1.8,
+            mount_height_m,
         }
     }
 }
