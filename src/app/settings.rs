@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::render::Colormap;
+use crate::render::{Colormap, FrameView};
 use crate::score::FusionWeights;
 
 /// The main view's modes.
@@ -30,6 +30,15 @@ impl ViewMode {
             Self::Frame => "frame",
             Self::Prediction => "predicted vs actual",
             Self::Flow => "flow vs reconstruction",
+        }
+    }
+
+    /// The per-frame view the mode shows.
+    pub fn frame_view(self) -> FrameView {
+        match self {
+            Self::Frame => FrameView::Frame,
+            Self::Prediction => FrameView::Pred,
+            Self::Flow => FrameView::Flow,
         }
     }
 }

@@ -10,57 +10,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use image::RgbaImage;
 
 use crate::render::{
-    self, DashboardInput, DashboardOptions, FlowViewInput, FrameScene, PredViewInput, Provenance,
-    ScoreLabels, ScoreSeries, ViewSettings,
+    DashboardInput, DashboardOptions, FrameScene, FrameView, Provenance, ScoreLabels, ScoreSeries,
+    ViewSettings, draw_frame_view,
 };
 use crate::score::{FlowProvider, FlowSource, PixelReferenceMode, ScoreCache};
 use crate::sequence::Scenario;
 
 use super::ExportError;
 use super::files::{GifWriter, write_png};
-
-/// The per-frame views an export can write.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum FrameView {
-    /// Every view of one frame in one image.
-    Dashboard,
-    /// The frame with heatmap, boxes, truth contour and caption.
-    Frame,
-    /// Actual vs predicted frame and patches.
-    Pred,
-    /// Flow vs reconstruction.
-    Flow,
-}
-
-impl FrameView {
-    /// Every view.
-    pub const ALL: [Self; 4] = [Self::Dashboard, Self::Frame, Self::Pred, Self::Flow];
-
-    /// The view's name in file names (`frame_00012.png`, `dashboard.gif`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Dashboard => "dashboard",
-            Self::Frame => "frame",
-            Self::Pred => "pred",
-            Self::Flow => "flow",
-        }
-    }
-
-    /// Whether drawing the view needs the frame's optical flow.
-    pub fn needs_flow(self) -> bool {
-        matches!(self, Self::Dashboard | Self::Flow)
-    }
-
-    /// The view's size when none is asked for, for a frame of `frame` pixels.
-    pub fn default_size(self, frame: (u32, u32), options: &DashboardOptions) -> (u32, u32) {
-        match self {
-            Self::Dashboard => (1600, 1000),
-            Self::Frame => render::natural_size(frame, &options.frame),
-            Self::Pred => (2 * frame.0, 2 * frame.1),
-            Self::Flow => (3 * frame.0, 2 * frame.1),
-        }
-    }
-}
 
 /// Draws the views of a scenario's frames: the scenario, its score cache, the fused score
 /// series and the view settings and options, as `vadscope render` and the viewer use them.
@@ -191,47 +148,20 @@ impl<'a> FrameRenderer<'a> {
         )?;
         let objects = scene.scene_objects();
         let caption = scene.caption(self.scenario.name(), &self.series, &self.settings);
-        let frame_input = scene.frame_input(&objects, Some(&caption));
+        let input = DashboardInput {
+            frame: scene.frame_input(&objects, Some(&caption)),
+            flow: scene.flow.as_deref(),
+            timeline: self
+                .series
+                .timeline(&[], Some(self.settings.threshold), Some(index)),
+            evaluation: Some(self.evaluation()),
+        };
         let dims = scene.frame.dimensions();
-        let options = &self.options;
         Ok(views
             .iter()
             .map(|&view| {
-                let size = size.unwrap_or_else(|| view.default_size(dims, options));
-                match view {
-                    FrameView::Frame => render::frame_view(&frame_input, &options.frame, size),
-                    FrameView::Pred => render::pred_view(
-                        &PredViewInput {
-                            frame: &scene.frame,
-                            objects: &objects,
-                        },
-                        &options.pred,
-                        size,
-                    ),
-                    FrameView::Flow => render::flow_view(
-                        &FlowViewInput {
-                            frame: &scene.frame,
-                            flow: scene.flow.as_deref(),
-                            objects: &objects,
-                        },
-                        &options.flow,
-                        size,
-                    ),
-                    FrameView::Dashboard => render::dashboard(
-                        &DashboardInput {
-                            frame: frame_input,
-                            flow: scene.flow.as_deref(),
-                            timeline: self.series.timeline(
-                                &[],
-                                Some(self.settings.threshold),
-                                Some(index),
-                            ),
-                            evaluation: Some(self.evaluation()),
-                        },
-                        options,
-                        size,
-                    ),
-                }
+                let size = size.unwrap_or_else(|| view.default_size(dims, &self.options));
+                draw_frame_view(view, &input, &self.options, size)
             })
             .collect())
     }

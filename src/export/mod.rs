@@ -14,9 +14,9 @@ mod error;
 mod files;
 mod frames;
 
+pub use crate::render::FrameView;
 pub use error::ExportError;
 pub use files::{GIF_FRAME_MS, GifWriter, frames_in, write_png, write_scores_csv};
 pub use frames::{
-    ExportProgress, ExportSummary, FileNaming, FrameRenderer, FrameView, FramesExport,
-    export_frames,
+    ExportProgress, ExportSummary, FileNaming, FrameRenderer, FramesExport, export_frames,
 };

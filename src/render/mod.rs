@@ -12,6 +12,7 @@
 //!   maps pixels to frames for hit-testing.
 //! - [`roc_chart`], [`histogram`]: evaluation charts of [`ScoreLabels`].
 //! - [`dashboard`]: all of them for one frame.
+//! - [`draw_frame_view`]: any per-frame [`FrameView`] by name (render, export, viewer).
 //!
 //! Data: [`ScoreSeries`] and [`FrameScene`] gather the inputs from a scenario and its
 //! score cache; [`scores_csv`] writes an export's score table with its [`Provenance`].
@@ -26,6 +27,7 @@ mod error;
 pub mod export;
 pub mod flow_view;
 pub mod frame_view;
+pub mod frame_views;
 mod gallery;
 mod legend;
 pub mod overlay;
@@ -45,6 +47,7 @@ pub use frame_view::{
     Caption, FrameViewInput, FrameViewOptions, HeatRange, MASK_COLOR, REFERENCE_RANGE_IQR,
     frame_view, natural_size,
 };
+pub use frame_views::{FrameView, draw_frame_view};
 pub use overlay::{LABELLED_BOXES, SceneObject, ScoreScale};
 pub use pred_view::{PredViewInput, PredViewOptions, pred_view};
 pub use scene::{

@@ -6,7 +6,6 @@
 use std::path::PathBuf;
 
 use crate::app::export_job::ExportChoice;
-use crate::app::settings::ViewMode;
 use crate::app::state::{Action, AppState};
 use crate::export::FrameView;
 
@@ -43,11 +42,7 @@ impl ExportDialog {
         self.open = true;
         self.first = state.frame();
         self.last = state.frame();
-        self.view = match state.settings().view {
-            ViewMode::Frame => FrameView::Frame,
-            ViewMode::Prediction => FrameView::Pred,
-            ViewMode::Flow => FrameView::Flow,
-        };
+        self.view = state.settings().view.frame_view();
     }
 
     /// Draws the dialog when it is open.

@@ -10,8 +10,8 @@ use crate::app::error::AppError;
 use crate::app::settings::{ViewMode, ViewSettings};
 use crate::app::state::AppState;
 use crate::render::{
-    Caption, FlowViewInput, FrameScene, FrameViewOptions, PredViewInput, SceneObject, ScoreLabels,
-    flow_view, frame_view, natural_size, pred_view, roc_chart,
+    Caption, DashboardInput, FrameScene, FrameView, FrameViewOptions, PredViewInput, SceneObject,
+    ScoreLabels, TimelineInput, draw_frame_view, natural_size, pred_view, roc_chart,
 };
 use crate::score::{FlowProvider, PixelReferenceMode};
 
@@ -165,51 +165,40 @@ pub fn main_image(state: &AppState, size: (u32, u32)) -> Result<Option<ViewImage
     };
     let objects = scene.scene_objects();
     let options = state.dashboard_options();
-    let mut frame_place = None;
-    let image = match settings.view {
-        ViewMode::Frame => {
-            let info = state.frame_info();
-            let caption = Caption {
-                scenario: state.entry().map_or_else(String::new, |e| e.name.clone()),
-                index: info.index,
-                frame_id: info.id.map(|id| id.0),
-                frame_score: info.filtered.filter(|v| v.is_finite()).or(info.raw),
-                threshold: Some(state.threshold()),
-                weights: Some(settings.weights),
-                truth: Some(info.anomalous),
-            };
-            let input = scene.frame_input(&objects, Some(&caption));
-            let frame = scene.frame.dimensions();
-            // render leaves the colour bar out when there is no heatmap (unscored).
-            let mut fit = options.frame;
-            fit.heatmap &= scene.heatmap.is_some();
-            let (scale, view) = fit_frame_view(frame, &fit, size);
-            let scaled_h = (frame.1 as f32 * scale).round();
-            frame_place = Some((
-                0.0,
-                view.1 as f32 - scaled_h,
-                scaled_h / frame.1.max(1) as f32,
-            ));
-            frame_view(&input, &options.frame, view)
-        }
-        ViewMode::Prediction => pred_view(
-            &PredViewInput {
-                frame: &scene.frame,
-                objects: &objects,
-            },
-            &options.pred,
-            size,
-        ),
-        ViewMode::Flow => flow_view(
-            &FlowViewInput {
-                frame: &scene.frame,
-                flow: scene.flow.as_deref(),
-                objects: &objects,
-            },
-            &options.flow,
-            size,
-        ),
+    let info = state.frame_info();
+    let caption = Caption {
+        scenario: state.entry().map_or_else(String::new, |e| e.name.clone()),
+        index: info.index,
+        frame_id: info.id.map(|id| id.0),
+        frame_score: info.filtered.filter(|v| v.is_finite()).or(info.raw),
+        threshold: Some(state.threshold()),
+        weights: Some(settings.weights),
+        truth: Some(info.anomalous),
     };
+    let view = settings.view.frame_view();
+    let input = DashboardInput {
+        frame: scene.frame_input(&objects, Some(&caption)),
+        flow: scene.flow.as_deref(),
+        timeline: TimelineInput::default(),
+        evaluation: None,
+    };
+    let (size, frame_place) = if view == FrameView::Frame {
+        let frame = scene.frame.dimensions();
+        // render leaves the colour bar out when there is no heatmap (unscored).
+        let mut fit = options.frame;
+        fit.heatmap &= scene.heatmap.is_some();
+        let (scale, fitted) = fit_frame_view(frame, &fit, size);
+        let scaled_h = (frame.1 as f32 * scale).round();
+        let place = (
+            0.0,
+            fitted.1 as f32 - scaled_h,
+            scaled_h / frame.1.max(1) as f32,
+        );
+        (fitted, Some(place))
+    } else {
+        (size, None)
+    };
+    let image = draw_frame_view(view, &input, &options, size);
     Ok(Some(ViewImage {
         image,
         frame_place,
