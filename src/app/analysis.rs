@@ -1,21 +1,11 @@
 //! Fused frame scores and live metrics: for the current weights, each scored scenario's
-//! score series (render's [`ScoreSeries`]: raw and median-filtered frame scores, z-scores,
+//! score series (`score`'s [`ScoreSeries`]: raw and median-filtered frame scores, z-scores,
 //! the series the timeline draws), its ROC metrics and detection latencies, and the same
 //! over the whole data set (micro and macro AUROC). Pure functions of the score tables,
 //! labels and settings, redone on every change of weights, filter or threshold.
 
 use crate::eval::{DetectionOutcome, RocCurve, ScoreMetrics, detection_outcomes, macro_auroc};
-use crate::render::ScoreSeries;
-use crate::score::{FusionWeights, ScoreTable};
-
-/// How frame scores are fused and filtered.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FusionParams {
-    /// The fusion weights.
-    pub weights: FusionWeights,
-    /// Median-filter kernel (0 or 1 = none).
-    pub median_kernel: usize,
-}
+use crate::score::{FusionParams, ScoreSeries, ScoreTable};
 
 /// One scored scenario under the current parameters.
 #[derive(Debug, Clone, PartialEq)]

@@ -30,7 +30,7 @@ pub mod ui;
 
 use std::path::PathBuf;
 
-pub use analysis::{DatasetMetrics, FusionParams, ScenarioAnalysis};
+pub use analysis::{DatasetMetrics, ScenarioAnalysis};
 pub use dataset::{Dataset, ScenarioEntry, ScoreStatus, Scores};
 pub use error::AppError;
 pub use export_job::{ExportChoice, ExportJob};

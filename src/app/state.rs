@@ -9,11 +9,11 @@ use std::path::{Path, PathBuf};
 use crate::annotate::{Edge, IntervalId, Rect, TrackId};
 use crate::eval::anomaly_events;
 use crate::export::ExportProgress;
-use crate::render::{DashboardOptions, ViewSettings as RenderSettings, reference_threshold};
-use crate::score::{ObjectMaps, ScoreProgress};
+use crate::render::{DashboardOptions, ViewSettings as RenderSettings};
+use crate::score::{FusionParams, ObjectMaps, ScoreProgress, reference_threshold};
 use crate::sequence::FrameId;
 
-use super::analysis::{DatasetMetrics, FusionParams, ScenarioAnalysis};
+use super::analysis::{DatasetMetrics, ScenarioAnalysis};
 use super::dataset::{Dataset, ScoreStatus, Scores};
 use super::error::AppError;
 use super::export_job::{ExportChoice, ExportEvent, ExportJob, ExportRequest};

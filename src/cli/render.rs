@@ -6,7 +6,7 @@ use std::sync::atomic::AtomicBool;
 
 use clap::{Args, ValueEnum};
 use vadscope::export::{FileNaming, FrameRenderer, FrameView, FramesExport, export_frames};
-use vadscope::render::{self, TimelineOptions};
+use vadscope::render::{self, TimelineInput, TimelineOptions};
 use vadscope::score::FlowSource;
 
 use super::scenario_views::{ScenarioViewArgs, save_png};
@@ -85,7 +85,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<ExitCode> {
                     window: windowed.then(|| frames.clone()),
                     ..TimelineOptions::default()
                 };
-                let input = series.timeline(&[], Some(settings.threshold), None);
+                let input = TimelineInput::of_series(series, &[], Some(settings.threshold), None);
                 let image = render::timeline(
                     &input,
                     &timeline_options,

@@ -5,8 +5,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-use vadscope::render::reference_threshold;
-use vadscope::score::{BoxSource, FusionWeights, ScoreCache};
+use vadscope::score::{BoxSource, FusionWeights, ScoreCache, reference_threshold};
 use vadscope::sequence::Scenario;
 
 use super::score::{Report, RunArgs, Scorer, parse_box_source};

@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 use image::codecs::gif::{GifEncoder, Repeat};
 use image::{Delay, Frame, RgbaImage};
 
-use crate::render::{Provenance, ScoreSeries, scores_csv};
+use crate::render::{Provenance, scores_csv};
+use crate::score::ScoreSeries;
 use crate::score::ScoreTable;
 use crate::sequence::Scenario;
 

@@ -10,10 +10,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use image::RgbaImage;
 
 use crate::render::{
-    DashboardInput, DashboardOptions, FrameScene, FrameView, Provenance, ScoreLabels, ScoreSeries,
-    ViewSettings, draw_frame_view,
+    DashboardInput, DashboardOptions, FrameScene, FrameView, Provenance, ScoreLabels,
+    TimelineInput, ViewSettings, draw_frame_view,
 };
-use crate::score::{FlowProvider, FlowSource, PixelReferenceMode, ScoreCache};
+use crate::score::{FlowProvider, FlowSource, PixelReferenceMode, ScoreCache, ScoreSeries};
 use crate::sequence::Scenario;
 
 use super::ExportError;
@@ -151,9 +151,12 @@ impl<'a> FrameRenderer<'a> {
         let input = DashboardInput {
             frame: scene.frame_input(&objects, Some(&caption)),
             flow: scene.flow.as_deref(),
-            timeline: self
-                .series
-                .timeline(&[], Some(self.settings.threshold), Some(index)),
+            timeline: TimelineInput::of_series(
+                &self.series,
+                &[],
+                Some(self.settings.threshold),
+                Some(index),
+            ),
             evaluation: Some(self.evaluation()),
         };
         let dims = scene.frame.dimensions();

@@ -8,7 +8,7 @@
 //!   per view ([`FramesExport`], [`FileNaming`]), with progress and cancellation.
 //! - [`write_scores_csv`], [`write_png`], [`GifWriter`], [`frames_in`].
 //!
-//! [`ScoreSeries`]: crate::render::ScoreSeries
+//! [`ScoreSeries`]: crate::score::ScoreSeries
 
 mod error;
 mod files;

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 
 use crate::score::{FusionWeights, ScoreTable};
 
-use super::scene::ScoreSeries;
+use crate::score::ScoreSeries;
 
 /// Column header of `scores.csv`.
 pub const SCORES_HEADER: &str = "frame,anovox_id,s_r,s_p,fused,filtered,label,prediction";

@@ -14,8 +14,8 @@
 //! - [`dashboard`]: all of them for one frame.
 //! - [`draw_frame_view`]: any per-frame [`FrameView`] by name (render, export, viewer).
 //!
-//! Data: [`ScoreSeries`] and [`FrameScene`] gather the inputs from a scenario and its
-//! score cache; [`scores_csv`] writes an export's score table with its [`Provenance`].
+//! Data: [`FrameScene`] gathers the inputs of one frame from a scenario and its score
+//! cache (the numbers, `score::ScoreSeries`, are `score`'s); [`scores_csv`] writes an export's score table with its [`Provenance`].
 
 mod canvas;
 mod chart_backend;
@@ -50,8 +50,5 @@ pub use frame_view::{
 pub use frame_views::{FrameView, draw_frame_view};
 pub use overlay::{LABELLED_BOXES, SceneObject, ScoreScale};
 pub use pred_view::{PredViewInput, PredViewOptions, pred_view};
-pub use scene::{
-    FrameScene, REFERENCE_THRESHOLD_SIGMA, ScoreSeries, ViewSettings, reference_error_range,
-    reference_threshold,
-};
+pub use scene::{FrameScene, ViewSettings, reference_error_range};
 pub use timeline::{TimelineInput, TimelineLayout, TimelineOptions, timeline};

@@ -10,6 +10,8 @@ use std::ops::Range;
 use image::RgbaImage;
 use plotters::prelude::*;
 
+use crate::score::ScoreSeries;
+
 use super::canvas::{Anchor, Canvas, render_view};
 use super::chart_backend::FAMILY;
 use super::legend::{LEGEND_TEXT, short_number};
@@ -33,6 +35,28 @@ pub struct TimelineInput<'a> {
     pub threshold: Option<f64>,
     /// The current frame.
     pub cursor: Option<usize>,
+}
+
+impl<'a> TimelineInput<'a> {
+    /// The timeline of `series` with the analyst's `labels`, `threshold` and the cursor on
+    /// `cursor`.
+    pub fn of_series(
+        series: &'a ScoreSeries,
+        labels: &'a [Option<bool>],
+        threshold: Option<f64>,
+        cursor: Option<usize>,
+    ) -> Self {
+        Self {
+            fused: &series.fused,
+            filtered: &series.filtered,
+            z_r: &series.z_r,
+            z_p: &series.z_p,
+            truth: &series.truth,
+            labels,
+            threshold,
+            cursor,
+        }
+    }
 }
 
 impl TimelineInput<'_> {

@@ -37,6 +37,7 @@ pub mod flows;
 pub mod fusion;
 pub mod motion;
 pub mod run;
+pub mod series;
 pub mod table;
 
 pub use baselines::{Baseline, baseline_frame_scores};
@@ -64,4 +65,5 @@ pub use run::{
     CubeScorer, CubeSource, FrameBoxes, ScenarioCubes, ScoreProgress, ScoreRequest, ScoringPlan,
     run_scoring, score_scenario, score_scenario_with,
 };
+pub use series::{FusionParams, REFERENCE_THRESHOLD_SIGMA, ScoreSeries, reference_threshold};
 pub use table::{TableFormat, format_eval_table, render_eval_table, render_sweep_table};

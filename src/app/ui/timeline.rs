@@ -389,9 +389,8 @@ fn chart_input(state: &AppState) -> TimelineInput<'_> {
         .map_or(&[][..], |l| l.timeline_lane());
     match state.current_analysis() {
         Some(analysis) => {
-            let mut input = analysis
-                .series
-                .timeline(labels, Some(state.threshold()), cursor);
+            let mut input =
+                TimelineInput::of_series(&analysis.series, labels, Some(state.threshold()), cursor);
             input.truth = state.labels();
             input
         }
