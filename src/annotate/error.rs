@@ -3,7 +3,6 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::score::ScoreError;
 use crate::sequence::SequenceError;
 
 /// Everything that can go wrong editing, saving, loading, importing or exporting labels.
@@ -12,9 +11,6 @@ pub enum AnnotateError {
     /// Reading the scenario (frames, ground truth) failed.
     #[error(transparent)]
     Sequence(#[from] SequenceError),
-    /// Reading an imported box file failed (MOT, COCO, YOLO, `boxes.csv`).
-    #[error(transparent)]
-    Import(#[from] ScoreError),
     /// The operating system refused to read or write a file.
     #[error("{path}: {source}")]
     Io {

@@ -20,8 +20,8 @@ use serde::{Deserialize, Serialize};
 use crate::sequence::{BoxRecord, Scenario};
 
 use super::ScoreError;
-use super::detections::{DetectionFile, DetectionTable};
 use super::motion::{MotionParams, blur_frame, motion_boxes};
+use crate::sequence::detections::{DetectionFile, DetectionTable};
 
 /// Where the boxes of the scored objects come from.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

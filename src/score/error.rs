@@ -30,24 +30,6 @@ pub enum ScoreError {
         /// What is wrong, in words.
         problem: String,
     },
-    /// A line of a detection file is malformed.
-    #[error("{path}:{line}: {problem}")]
-    DetectionLine {
-        /// Detection file.
-        path: PathBuf,
-        /// 1-based line number.
-        line: usize,
-        /// What is wrong with that line.
-        problem: String,
-    },
-    /// A detection file as a whole cannot be used (unknown format, bad JSON structure).
-    #[error("{path}: {problem}")]
-    DetectionFile {
-        /// Detection file or folder.
-        path: PathBuf,
-        /// What is wrong, in words.
-        problem: String,
-    },
     /// The model failed on the cubes of a frame.
     #[error("{scenario}, frame {frame}: {source}")]
     Model {
@@ -104,23 +86,6 @@ impl ScoreError {
     /// A problem with the score cache at `path`.
     pub fn cache(path: &Path, problem: impl Into<String>) -> Self {
         Self::Cache {
-            path: path.to_path_buf(),
-            problem: problem.into(),
-        }
-    }
-
-    /// A problem with line `line` (1-based) of detection file `path`.
-    pub fn line(path: &Path, line: usize, problem: impl Into<String>) -> Self {
-        Self::DetectionLine {
-            path: path.to_path_buf(),
-            line,
-            problem: problem.into(),
-        }
-    }
-
-    /// A problem with detection file `path` as a whole.
-    pub fn detections(path: &Path, problem: impl Into<String>) -> Self {
-        Self::DetectionFile {
             path: path.to_path_buf(),
             problem: problem.into(),
         }

@@ -7,7 +7,7 @@
 //!
 //! Entry points:
 //! - [`BoxSource`] / [`BoxProvider`]: ground truth, the scenario's detections, imported
-//!   detection files ([`detections`]: MOT, COCO, YOLO, `boxes.csv`) and the detector-free
+//!   detection files (read by `sequence::detections`: MOT, COCO, YOLO, `boxes.csv`) and the detector-free
 //!   motion boxes ([`motion`]); [`match_boxes`] / [`BoxMatchStats`] / [`match_scenario`] for
 //!   box IoU and recall against the ground truth.
 //! - [`FlowSource`] / [`FlowProvider`]: stored flows, or DIS estimates.
@@ -30,7 +30,6 @@
 pub mod baselines;
 pub mod boxes;
 pub mod cache;
-pub mod detections;
 mod error;
 pub mod evaluate;
 pub mod flows;
@@ -40,6 +39,7 @@ pub mod run;
 pub mod series;
 pub mod table;
 
+pub use crate::sequence::detections::{DetectionFile, DetectionFormat, FrameNumbering};
 pub use baselines::{Baseline, baseline_frame_scores};
 pub use boxes::{
     BoxMatch, BoxMatchStats, BoxProvider, BoxSource, box_iou, match_boxes, match_scenario,
@@ -48,7 +48,6 @@ pub use cache::{
     CacheKey, CacheLookup, CacheWriter, FrameEntry, FrameState, ModelKey, ObjectMaps, ObjectScore,
     PixelReference, ScoreCache, ScoreMeta, ScoreTable, write_cache,
 };
-pub use detections::{DetectionFile, DetectionFormat, FrameNumbering};
 pub use error::ScoreError;
 pub use evaluate::{
     EvalRow, FrameSeries, Grouping, PixelRoc, SWEEP_VALUES, ScenarioScores, SweepRow,

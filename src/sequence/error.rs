@@ -67,6 +67,15 @@ impl SequenceError {
             problem: problem.into(),
         }
     }
+
+    /// A problem with line `line` (1-based) of `path`.
+    pub fn line(path: impl Into<PathBuf>, line: usize, problem: impl Into<String>) -> Self {
+        Self::Line {
+            path: path.into(),
+            line,
+            problem: problem.into(),
+        }
+    }
 }
 
 impl Clone for SequenceError {

@@ -26,6 +26,7 @@ pub mod boxes;
 pub mod cache;
 mod csv_table;
 pub mod depth;
+pub mod detections;
 pub mod discovery;
 pub mod error;
 pub mod flow_file;

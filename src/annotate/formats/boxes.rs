@@ -1,13 +1,12 @@
 //! The box formats: `boxes.csv`, MOT `gt.txt`, COCO JSON and YOLO with track ids. Exports
-//! write every visible box of every frame; imports go through `score::detections`.
+//! write every visible box of every frame; imports go through `sequence::detections`.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::atomic_file::write_atomically;
-use crate::score::detections::DetectionTable;
-use crate::score::{DetectionFile, DetectionFormat, FrameNumbering};
 use crate::sequence::boxes::format_boxes;
+use crate::sequence::detections::{DetectionFile, DetectionFormat, DetectionTable, FrameNumbering};
 use crate::sequence::{BoxRecord, Modality, Scenario};
 
 use super::super::AnnotateError;

@@ -11,7 +11,7 @@
 //!
 //! Exports write every visible (interpolated) box of every frame, and files atomically.
 //! An import is one [`Edit`] (undoable, journaled) that replaces the kinds of label the
-//! format carries; the box formats are read with `score::detections`' parsers.
+//! format carries; the box formats are read with `sequence::detections`' parsers.
 
 mod boxes;
 mod tables;

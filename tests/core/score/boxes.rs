@@ -3,12 +3,12 @@
 
 use std::path::Path;
 
-use vadscope::score::detections::{FrameRef, parse_coco, parse_mot, parse_yolo};
 use vadscope::score::motion::{blur_frame, motion_boxes};
 use vadscope::score::{
     BoxMatchStats, BoxProvider, BoxSource, DetectionFile, DetectionFormat, FrameNumbering,
     MotionParams, box_iou, match_boxes, match_scenario,
 };
+use vadscope::sequence::detections::{FrameRef, parse_coco, parse_mot, parse_yolo};
 use vadscope::sequence::{BoxRecord, FrameId, Scenario};
 
 use crate::support::scenario::{SQUARE, square_box, square_frame, square_scenario, square_x};
@@ -175,7 +175,10 @@ fn iou_and_greedy_matching() {
     assert_eq!(BoxMatchStats::new(0.5).mean_iou(), None);
 }
 
-fn line_error(result: Result<impl std::fmt::Debug, vadscope::score::ScoreError>, needle: &str) {
+fn line_error(
+    result: Result<impl std::fmt::Debug, vadscope::sequence::SequenceError>,
+    needle: &str,
+) {
     let message = result.expect_err("malformed input").to_string();
     assert!(message.contains(needle), "expected {needle:?} in {message}");
 }

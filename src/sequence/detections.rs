@@ -18,9 +18,9 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::sequence::{BoxRecord, FrameId, Modality, Scenario};
-
-use super::ScoreError;
+use super::error::SequenceError;
+use super::scenario::Scenario;
+use super::types::{BoxRecord, FrameId, Modality};
 
 /// The format of a detection file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -40,7 +40,7 @@ impl DetectionFormat {
     /// Guesses the format: a folder or `.txt` file whose first data line has 5–7
     /// space-separated fields is YOLO; `.json` is COCO; a file whose first line starts with
     /// `frame,` is `boxes.csv`; other `.txt`/`.csv` files are MOT.
-    pub fn guess(path: &Path) -> Result<Self, ScoreError> {
+    pub fn guess(path: &Path) -> Result<Self, SequenceError> {
         if path.is_dir() {
             return Ok(Self::Yolo);
         }
@@ -50,7 +50,7 @@ impl DetectionFormat {
         if ext.as_deref() == Some("json") {
             return Ok(Self::Coco);
         }
-        let text = std::fs::read_to_string(path).map_err(|e| ScoreError::io(path, e))?;
+        let text = std::fs::read_to_string(path).map_err(|e| SequenceError::io(path, e))?;
         let first = text
             .lines()
             .map(str::trim)
@@ -63,7 +63,7 @@ impl DetectionFormat {
         } else if first.contains(',') {
             Ok(Self::Mot)
         } else {
-            Err(ScoreError::detections(
+            Err(SequenceError::format(
                 path,
                 "cannot tell the detection format (expected boxes.csv, MOT .txt, COCO .json or YOLO .txt)",
             ))
@@ -131,14 +131,14 @@ fn record(track_id: u64, class: u16, xywh: [f64; 4], score: f64) -> BoxRecord {
 }
 
 /// Parses a number of a text row; `what` names the column in the error.
-fn number(path: &Path, line: usize, field: &str, what: &str) -> Result<f64, ScoreError> {
+fn number(path: &Path, line: usize, field: &str, what: &str) -> Result<f64, SequenceError> {
     field
         .trim()
         .parse::<f64>()
         .ok()
         .filter(|v| v.is_finite())
         .ok_or_else(|| {
-            ScoreError::line(
+            SequenceError::line(
                 path,
                 line,
                 format!("{what} {field:?} is not a finite number"),
@@ -147,10 +147,10 @@ fn number(path: &Path, line: usize, field: &str, what: &str) -> Result<f64, Scor
 }
 
 /// A non-negative integer written as an integer or as an integral float (`12` or `12.0`).
-fn whole(path: &Path, line: usize, field: &str, what: &str) -> Result<u64, ScoreError> {
+fn whole(path: &Path, line: usize, field: &str, what: &str) -> Result<u64, SequenceError> {
     let v = number(path, line, field, what)?;
     if v < 0.0 || v.fract() != 0.0 || v > u32::MAX as f64 {
-        return Err(ScoreError::line(
+        return Err(SequenceError::line(
             path,
             line,
             format!("{what} {field:?} is not a non-negative whole number"),
@@ -160,10 +160,10 @@ fn whole(path: &Path, line: usize, field: &str, what: &str) -> Result<u64, Score
 }
 
 /// Track id or class: −1 (unknown) and other negatives become 0.
-fn optional_id(path: &Path, line: usize, field: &str, what: &str) -> Result<u64, ScoreError> {
+fn optional_id(path: &Path, line: usize, field: &str, what: &str) -> Result<u64, SequenceError> {
     let v = number(path, line, field, what)?;
     if v.fract() != 0.0 {
-        return Err(ScoreError::line(
+        return Err(SequenceError::line(
             path,
             line,
             format!("{what} {field:?} is not a whole number"),
@@ -172,9 +172,9 @@ fn optional_id(path: &Path, line: usize, field: &str, what: &str) -> Result<u64,
     Ok(if v < 0.0 { 0 } else { v as u64 })
 }
 
-fn check_size(path: &Path, line: usize, w: f64, h: f64) -> Result<(), ScoreError> {
+fn check_size(path: &Path, line: usize, w: f64, h: f64) -> Result<(), SequenceError> {
     if w < 0.0 || h < 0.0 {
-        return Err(ScoreError::line(
+        return Err(SequenceError::line(
             path,
             line,
             format!("box size {w}×{h} is negative"),
@@ -185,7 +185,7 @@ fn check_size(path: &Path, line: usize, w: f64, h: f64) -> Result<(), ScoreError
 
 /// Parses MOTChallenge text: `frame,id,left,top,width,height[,conf[,class[,...]]]` per line;
 /// blank lines and `#` comments are skipped.
-pub fn parse_mot(path: &Path, text: &str) -> Result<Vec<RawDetection>, ScoreError> {
+pub fn parse_mot(path: &Path, text: &str) -> Result<Vec<RawDetection>, SequenceError> {
     let mut out = Vec::new();
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
@@ -195,7 +195,7 @@ pub fn parse_mot(path: &Path, text: &str) -> Result<Vec<RawDetection>, ScoreErro
         }
         let fields: Vec<&str> = row.split(',').collect();
         if fields.len() < 6 {
-            return Err(ScoreError::line(
+            return Err(SequenceError::line(
                 path,
                 line,
                 format!(
@@ -236,7 +236,7 @@ pub fn parse_yolo(
     frame: FrameRef,
     width: u32,
     height: u32,
-) -> Result<Vec<RawDetection>, ScoreError> {
+) -> Result<Vec<RawDetection>, SequenceError> {
     let (iw, ih) = (f64::from(width), f64::from(height));
     let mut out = Vec::new();
     for (i, raw) in text.lines().enumerate() {
@@ -247,7 +247,7 @@ pub fn parse_yolo(
         }
         let fields: Vec<&str> = row.split_whitespace().collect();
         if !(5..=7).contains(&fields.len()) {
-            return Err(ScoreError::line(
+            return Err(SequenceError::line(
                 path,
                 line,
                 format!(
@@ -261,7 +261,7 @@ pub fn parse_yolo(
         for (k, name) in ["cx", "cy", "w", "h"].iter().enumerate() {
             v[k] = number(path, line, fields[k + 1], name)?;
             if !(-0.5..=1.5).contains(&v[k]) {
-                return Err(ScoreError::line(
+                return Err(SequenceError::line(
                     path,
                     line,
                     format!(
@@ -322,9 +322,10 @@ struct CocoAnnotation {
 /// Parses COCO JSON: a results array (`[{image_id, category_id, bbox, score}]`) or a dataset
 /// object (`{images: [{id, file_name}], annotations: [...]}`). Syntax and type errors name
 /// the line and column; bad boxes name the annotation.
-pub fn parse_coco(path: &Path, text: &str) -> Result<Vec<RawDetection>, ScoreError> {
-    let json_error =
-        |e: serde_json::Error| ScoreError::line(path, e.line(), format!("invalid COCO JSON: {e}"));
+pub fn parse_coco(path: &Path, text: &str) -> Result<Vec<RawDetection>, SequenceError> {
+    let json_error = |e: serde_json::Error| {
+        SequenceError::line(path, e.line(), format!("invalid COCO JSON: {e}"))
+    };
     let (annotations, names) = if text.trim_start().starts_with('[') {
         let list: Vec<CocoAnnotation> = serde_json::from_str(text).map_err(json_error)?;
         (list, None)
@@ -348,7 +349,7 @@ pub fn parse_coco(path: &Path, text: &str) -> Result<Vec<RawDetection>, ScoreErr
         .enumerate()
         .map(|(k, a)| {
             let problem = |what: String| {
-                ScoreError::detections(
+                SequenceError::format(
                     path,
                     format!("annotation {k} (image_id {}): {what}", a.image_id),
                 )
@@ -396,7 +397,7 @@ pub struct DetectionFile {
 
 impl DetectionFile {
     /// A file of a guessed format with default numbering and no score limit.
-    pub fn guess(path: &Path) -> Result<Self, ScoreError> {
+    pub fn guess(path: &Path) -> Result<Self, SequenceError> {
         Ok(Self {
             path: path.to_path_buf(),
             format: DetectionFormat::guess(path)?,
@@ -406,9 +407,9 @@ impl DetectionFile {
     }
 
     /// Reads every detection (`width`×`height` scales YOLO's normalised boxes).
-    pub fn read(&self, width: u32, height: u32) -> Result<Vec<RawDetection>, ScoreError> {
+    pub fn read(&self, width: u32, height: u32) -> Result<Vec<RawDetection>, SequenceError> {
         let path = &self.path;
-        let read = |p: &Path| std::fs::read_to_string(p).map_err(|e| ScoreError::io(p, e));
+        let read = |p: &Path| std::fs::read_to_string(p).map_err(|e| SequenceError::io(p, e));
         let mut all = match self.format {
             DetectionFormat::BoxesCsv => crate::sequence::boxes::read_boxes(path)?
                 .into_iter()
@@ -422,7 +423,7 @@ impl DetectionFile {
             DetectionFormat::Yolo => {
                 let files = if path.is_dir() {
                     let mut files: Vec<PathBuf> = std::fs::read_dir(path)
-                        .map_err(|e| ScoreError::io(path, e))?
+                        .map_err(|e| SequenceError::io(path, e))?
                         .filter_map(Result::ok)
                         .map(|e| e.path())
                         .filter(|p| p.extension().is_some_and(|e| e == "txt"))
@@ -457,15 +458,15 @@ impl DetectionFile {
 
     /// A short stable name for cache file names: format and a hash of the file contents and
     /// reading options, so a changed file gets a new cache.
-    pub fn key(&self) -> Result<String, ScoreError> {
+    pub fn key(&self) -> Result<String, SequenceError> {
         let mut hash = crate::fnv::Fnv64::new();
-        let mut add_file = |p: &Path| -> Result<(), ScoreError> {
-            hash.write(&std::fs::read(p).map_err(|e| ScoreError::io(p, e))?);
+        let mut add_file = |p: &Path| -> Result<(), SequenceError> {
+            hash.write(&std::fs::read(p).map_err(|e| SequenceError::io(p, e))?);
             Ok(())
         };
         if self.path.is_dir() {
             let mut files: Vec<PathBuf> = std::fs::read_dir(&self.path)
-                .map_err(|e| ScoreError::io(&self.path, e))?
+                .map_err(|e| SequenceError::io(&self.path, e))?
                 .filter_map(Result::ok)
                 .map(|e| e.path())
                 .collect();
