@@ -1,6 +1,6 @@
 //! The background scoring job: on its own thread, for each scenario in turn, it opens the
 //! scenario's score cache for the model, box source and flow source, or scores the scenario
-//! with `score::score_scenario` when there is none, and reports progress and results over a
+//! with `score::Scorer` when there is none, and reports progress and results over a
 //! channel. The UI polls the channel every frame, so it never waits; cancelling sets a flag
 //! that the scoring run checks between batches (nothing half-done is written).
 
@@ -8,8 +8,8 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::Sender;
 
-use crate::model::{Detector, bundled_model};
-use crate::score::{ModelKey, ScoreCache, ScoreError, ScoreProgress, ScoreRequest, score_scenario};
+use crate::model::bundled_model;
+use crate::score::{CacheLookup, ScoreCache, ScoreError, ScoreProgress, ScoreRequest, Scorer};
 use crate::sequence::Scenario;
 
 use super::background::BackgroundThread;
@@ -94,13 +94,6 @@ impl ScoringJob {
     }
 }
 
-/// The model as loaded by the job thread: its cache key, and the detector once needed.
-struct LoadedModel {
-    path: PathBuf,
-    key: ModelKey,
-    detector: Option<Detector>,
-}
-
 fn run_job(
     setup: &ScoringSetup,
     scenarios: &[(usize, PathBuf)],
@@ -119,14 +112,9 @@ fn run_job(
         Ok(path) => path,
         Err(e) => return fail_all(e.to_string()),
     };
-    let key = match ModelKey::of_checkpoint(&path) {
-        Ok(key) => key,
+    let mut scorer = match Scorer::new(path) {
+        Ok(scorer) => scorer,
         Err(e) => return fail_all(e.to_string()),
-    };
-    let mut model = LoadedModel {
-        path,
-        key,
-        detector: None,
     };
     for (position, (index, root)) in scenarios.iter().enumerate() {
         if cancel.load(Ordering::Relaxed) {
@@ -134,7 +122,7 @@ fn run_job(
             let _ = events.send(JobEvent::Cancelled { unscored });
             return;
         }
-        let event = match score_one(*index, root, setup, &mut model, events, cancel) {
+        let event = match score_one(*index, root, setup, &mut scorer, events, cancel) {
             Ok((cache, computed)) => JobEvent::Scored {
                 scenario: *index,
                 cache: Box::new(cache),
@@ -160,32 +148,23 @@ fn score_one(
     index: usize,
     root: &std::path::Path,
     setup: &ScoringSetup,
-    model: &mut LoadedModel,
+    scorer: &mut Scorer,
     events: &Sender<JobEvent>,
     cancel: &AtomicBool,
 ) -> Result<(ScoreCache, bool), AppError> {
     let scenario = Scenario::open(root)?;
-    let key = setup.request.key(&scenario, model.key)?;
-    if let Some(cache) = ScoreCache::lookup(&scenario, &key)? {
-        return Ok((cache, false));
+    match scorer.find(&scenario, &setup.request)? {
+        CacheLookup::Current(cache) => return Ok((*cache, false)),
+        // The viewer reports a cache it cannot use rather than replacing it unasked.
+        CacheLookup::Unusable { error, .. } => return Err(error.into()),
+        CacheLookup::Missing(_) => {}
     }
-    let detector = match &mut model.detector {
-        Some(detector) => detector,
-        slot => slot.insert(Detector::from_checkpoint(&model.path)?),
-    };
     let mut report = |progress: ScoreProgress| {
         let _ = events.send(JobEvent::Progress {
             scenario: index,
             progress,
         });
     };
-    let cache = score_scenario(
-        &scenario,
-        detector,
-        model.key,
-        &setup.request,
-        &mut report,
-        cancel,
-    )?;
+    let cache = scorer.score(&scenario, &setup.request, &mut report, cancel)?;
     Ok((cache, true))
 }

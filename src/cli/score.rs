@@ -1,7 +1,8 @@
 //! `vadscope score`: runs the model over scenarios into their score caches
 //! (`<scenario>/.vadscope/scores/`) with a progress bar, reusing caches that are current.
-//! Also the scoring step of `vadscope eval` ([`Scorer`]), and the parsing of the box and
-//! flow source options both commands share.
+//! Also the scoring step of `vadscope eval`, `render` and `export` ([`Scorer`]: the loop of
+//! `score::Scorer` with a progress bar and a line per scenario), and the parsing of the box
+//! and flow source options the commands share.
 //!
 //! Ctrl-C cancels the run in progress: its temporary file is removed and no cache appears
 //! under the real name (caches are written to a scratch name and renamed when complete, so
@@ -16,10 +17,10 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use vadscope::flow::DisPreset;
-use vadscope::model::{Detector, bundled_model, read_checkpoint_meta};
+use vadscope::model::{bundled_model, read_checkpoint_meta};
 use vadscope::score::{
-    BoxSource, CacheLookup, DetectionFile, FlowSource, ModelKey, MotionParams, ScoreCache,
-    ScoreProgress, ScoreRequest, score_scenario,
+    self, BoxSource, CacheLookup, DetectionFile, FlowSource, MotionParams, ScoreCache,
+    ScoreProgress, ScoreRequest,
 };
 use vadscope::sequence::{Scenario, discover_scenarios};
 
@@ -146,12 +147,10 @@ pub enum Report {
     Stderr,
 }
 
-/// Scores scenarios with one checkpoint, loading the model only when some scenario has no
-/// current cache.
+/// Scores scenarios with one checkpoint through `score::Scorer` (the model loaded only when
+/// some scenario has no current cache), showing a progress bar and a line per scenario.
 pub struct Scorer {
-    checkpoint: PathBuf,
-    key: ModelKey,
-    detector: Option<Detector>,
+    scorer: score::Scorer,
     flow: FlowSource,
     batch: usize,
     report: Report,
@@ -166,7 +165,7 @@ impl Scorer {
             None => bundled_model()?,
         };
         read_checkpoint_meta(&checkpoint)?;
-        let key = ModelKey::of_checkpoint(&checkpoint)?;
+        let scorer = score::Scorer::new(checkpoint)?;
         ctrlc::set_handler(|| {
             // The first Ctrl-C cancels cleanly; a second one exits at once.
             if CANCEL.swap(true, Ordering::SeqCst) {
@@ -175,9 +174,7 @@ impl Scorer {
         })
         .context("cannot install the Ctrl-C handler")?;
         Ok(Self {
-            checkpoint,
-            key,
-            detector: None,
+            scorer,
             flow: run.flow,
             batch: run.batch as usize,
             report,
@@ -186,7 +183,7 @@ impl Scorer {
 
     /// The checkpoint this scorer scores with.
     pub fn checkpoint(&self) -> &Path {
-        &self.checkpoint
+        self.scorer.checkpoint()
     }
 
     fn say(&self, line: &str) {
@@ -214,9 +211,8 @@ impl Scorer {
         force: bool,
     ) -> anyhow::Result<ScoreCache> {
         let request = self.request(boxes);
-        let key = request.key(scenario, self.key)?;
         let name = scenario.name().to_string();
-        match ScoreCache::find(scenario, &key)? {
+        match self.scorer.find(scenario, &request)? {
             CacheLookup::Current(cache) if !force => {
                 let t = cache.table();
                 self.say(&format!(
@@ -228,13 +224,12 @@ impl Scorer {
                 ));
                 return Ok(*cache);
             }
-            CacheLookup::Unusable { reason, .. } => {
-                self.say(&format!("{name}: scoring again: {reason}"));
+            CacheLookup::Unusable { error, .. } => {
+                self.say(&format!("{name}: scoring again: {error}"));
             }
             CacheLookup::Current(_) | CacheLookup::Missing(_) => {}
         }
-        self.load_detector()?;
-        let detector = self.detector.as_ref().expect("loaded above");
+        self.scorer.load_model()?;
         let frames = scenario.len() as u64;
         let bar = ProgressBar::new(frames).with_style(
             ProgressStyle::with_template(
@@ -245,10 +240,8 @@ impl Scorer {
         );
         bar.set_prefix(name.clone());
         let started = Instant::now();
-        let cache = score_scenario(
+        let cache = self.scorer.score(
             scenario,
-            detector,
-            self.key,
             &request,
             &mut |p: ScoreProgress| {
                 bar.set_position(p.frames_done as u64);
@@ -261,7 +254,7 @@ impl Scorer {
             format!(
                 "scoring {} with {}",
                 scenario.root().display(),
-                self.checkpoint.display()
+                self.scorer.checkpoint().display()
             )
         })?;
         let seconds = started.elapsed().as_secs_f64();
@@ -275,14 +268,6 @@ impl Scorer {
             cache.path().display()
         ));
         Ok(cache)
-    }
-
-    /// Loads the model unless it is loaded already.
-    fn load_detector(&mut self) -> anyhow::Result<()> {
-        if self.detector.is_none() {
-            self.detector = Some(Detector::from_checkpoint(&self.checkpoint)?);
-        }
-        Ok(())
     }
 }
 

@@ -30,6 +30,9 @@ pub enum ScoreError {
         /// What is wrong, in words.
         problem: String,
     },
+    /// The model could not be loaded.
+    #[error(transparent)]
+    LoadModel(#[from] ModelError),
     /// The model failed on the cubes of a frame.
     #[error("{scenario}, frame {frame}: {source}")]
     Model {

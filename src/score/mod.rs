@@ -36,6 +36,7 @@ pub mod flows;
 pub mod fusion;
 pub mod motion;
 pub mod run;
+mod scorer;
 pub mod series;
 pub mod table;
 
@@ -64,5 +65,6 @@ pub use run::{
     CubeScorer, CubeSource, FrameBoxes, ScenarioCubes, ScoreProgress, ScoreRequest, ScoringPlan,
     run_scoring, score_scenario, score_scenario_with,
 };
+pub use scorer::Scorer;
 pub use series::{FusionParams, REFERENCE_THRESHOLD_SIGMA, ScoreSeries, reference_threshold};
 pub use table::{TableFormat, format_eval_table, render_eval_table, render_sweep_table};

@@ -26,8 +26,8 @@ pub enum CacheLookup {
     Unusable {
         /// The file.
         path: PathBuf,
-        /// Why, in words (names the file).
-        reason: String,
+        /// Why (names the file).
+        error: ScoreError,
     },
 }
 
@@ -164,11 +164,8 @@ impl ScoreCache {
         });
         match opened {
             Ok(cache) => Ok(CacheLookup::Current(Box::new(cache))),
-            Err(e @ (ScoreError::Cache { .. } | ScoreError::Io { .. })) => {
-                Ok(CacheLookup::Unusable {
-                    path,
-                    reason: e.to_string(),
-                })
+            Err(error @ (ScoreError::Cache { .. } | ScoreError::Io { .. })) => {
+                Ok(CacheLookup::Unusable { path, error })
             }
             Err(e) => Err(e),
         }
