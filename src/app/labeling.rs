@@ -13,8 +13,8 @@ use crate::annotate::{
 };
 use crate::sequence::Scenario;
 
+use super::action::Action;
 use super::error::AppError;
-use super::state::Action;
 
 /// Class given to a box the analyst draws (CARLA's `car`).
 pub const NEW_BOX_CLASS: u16 = 14;

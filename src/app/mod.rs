@@ -14,6 +14,7 @@
 //! images drawn by `render`. [`Layout`] keeps panel sizes, settings and recent data sets
 //! between runs. [`run`] opens the window.
 
+pub mod action;
 pub mod analysis;
 pub mod background;
 pub mod dataset;
@@ -30,6 +31,7 @@ pub mod ui;
 
 use std::path::PathBuf;
 
+pub use action::Action;
 pub use analysis::{DatasetMetrics, ScenarioAnalysis};
 pub use dataset::{Dataset, ScenarioEntry, ScoreStatus, Scores};
 pub use error::AppError;
@@ -41,7 +43,7 @@ pub use layout::Layout;
 pub use playback::Playback;
 pub use settings::{Overlay, Overlays, Reference, ThresholdMode, ViewMode, ViewSettings};
 pub use state::{
-    Action, AppState, BACKGROUND_FRAME_CACHE, CURRENT_FRAME_CACHE, FrameInfo, LogEntry, LogLevel,
+    AppState, BACKGROUND_FRAME_CACHE, CURRENT_FRAME_CACHE, FrameInfo, LogEntry, LogLevel,
     ObjectInfo,
 };
 pub use ui::ViewerApp;

@@ -1,8 +1,9 @@
 //! The scenario browser: every scenario of the open data set with its frame count,
 //! conditions, scoring status and AUROC under the current weights; a click opens it.
 
+use crate::app::action::Action;
 use crate::app::dataset::ScoreStatus;
-use crate::app::state::{Action, AppState};
+use crate::app::state::AppState;
 
 /// Draws the list.
 pub fn show(ui: &mut egui::Ui, state: &mut AppState) {

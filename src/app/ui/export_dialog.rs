@@ -5,8 +5,9 @@
 
 use std::path::PathBuf;
 
+use crate::app::action::Action;
 use crate::app::export_job::ExportChoice;
-use crate::app::state::{Action, AppState};
+use crate::app::state::AppState;
 use crate::export::FrameView;
 
 /// The dialog's choices, kept between openings.

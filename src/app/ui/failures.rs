@@ -6,8 +6,9 @@
 use std::collections::HashMap;
 use std::collections::hash_map::Entry;
 
+use crate::app::action::Action;
 use crate::app::failures::FailureKind;
-use crate::app::state::{Action, AppState, LogLevel};
+use crate::app::state::{AppState, LogLevel};
 
 /// Cases listed per kind until "show all" is ticked.
 const SHOWN_PER_KIND: usize = 8;

@@ -1,7 +1,8 @@
 //! The help overlay: every key binding (from the one table in `input`) and the mouse
 //! gestures, in a window that F1 or ? toggles.
 
-use crate::app::state::{Action, AppState};
+use crate::app::action::Action;
+use crate::app::state::AppState;
 
 use super::input::{BINDINGS, OTHER_KEYS};
 

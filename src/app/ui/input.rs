@@ -4,8 +4,9 @@
 
 use egui::{Key, Modifiers};
 
+use crate::app::action::Action;
 use crate::app::settings::{Overlay, ViewMode};
-use crate::app::state::{Action, AppState};
+use crate::app::state::AppState;
 
 /// One key binding.
 #[derive(Debug, Clone, Copy)]

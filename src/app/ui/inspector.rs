@@ -2,8 +2,9 @@
 //! the main view), and for the selected one S_r, S_p, their z-scores, the object score and
 //! its actual, predicted and error patches as render draws them.
 
+use crate::app::action::Action;
 use crate::app::settings::ViewSettings;
-use crate::app::state::{Action, AppState, LogLevel};
+use crate::app::state::{AppState, LogLevel};
 
 use super::texture::CachedTexture;
 use super::views;

@@ -8,7 +8,8 @@
 use egui::{Color32, CursorIcon, Pos2, Stroke, StrokeKind};
 
 use crate::annotate::{Rect, TrackId};
-use crate::app::state::{Action, AppState};
+use crate::app::action::Action;
+use crate::app::state::AppState;
 
 use super::views::ViewImage;
 

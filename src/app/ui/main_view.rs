@@ -6,8 +6,9 @@
 
 use image::RgbaImage;
 
+use crate::app::action::Action;
 use crate::app::settings::{Overlay, ViewMode, ViewSettings};
-use crate::app::state::{Action, AppState, LogLevel};
+use crate::app::state::{AppState, LogLevel};
 
 use super::labeling_view::{self, BoxEditor};
 use super::texture::CachedTexture;

@@ -10,8 +10,9 @@ use std::ops::Range;
 use egui::{Color32, CursorIcon, Pos2, Stroke};
 
 use crate::annotate::{Edge, EdgeRef};
+use crate::app::action::Action;
 use crate::app::settings::{ThresholdMode, ViewSettings};
-use crate::app::state::{Action, AppState};
+use crate::app::state::AppState;
 use crate::render::{TimelineInput, TimelineLayout, TimelineOptions, timeline};
 
 use super::texture::CachedTexture;

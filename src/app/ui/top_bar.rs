@@ -4,8 +4,9 @@
 
 use std::path::PathBuf;
 
+use crate::app::action::Action;
 use crate::app::layout::Layout;
-use crate::app::state::{Action, AppState};
+use crate::app::state::AppState;
 
 use super::export_dialog::{self, ExportDialog};
 use super::main_view::MainView;
