@@ -13,7 +13,7 @@ use crate::export::{
     write_scores_csv,
 };
 use crate::model::bundled_model;
-use crate::render::{DashboardOptions, ViewSettings as RenderSettings};
+use crate::render::{DashboardOptions, DrawSettings};
 use crate::score::{CacheKey, FlowSource, ScoreCache};
 use crate::sequence::Scenario;
 
@@ -48,7 +48,7 @@ pub struct ExportRequest {
     /// The per-frame anomaly flags the scores are measured against.
     pub labels: Vec<bool>,
     /// Weights, threshold, filter and colormap, as the viewer shows them.
-    pub settings: RenderSettings,
+    pub settings: DrawSettings,
     /// View options, as the viewer shows them (overlays, opacity).
     pub options: DashboardOptions,
     /// Where flow is read from.

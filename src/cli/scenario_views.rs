@@ -10,7 +10,8 @@ use anyhow::Context;
 use clap::Args;
 use image::RgbaImage;
 use vadscope::export;
-use vadscope::render::{Colormap, ViewSettings};
+use vadscope::render::{Colormap, DrawSettings};
+use vadscope::score::FusionParams;
 use vadscope::score::ScoreCache;
 use vadscope::sequence::Scenario;
 use vadscope::synth::parse_size;
@@ -57,14 +58,16 @@ impl ScenarioViewArgs {
         Ok(export::frames_in(scenario, self.frames.as_ref())?)
     }
 
-    /// The view settings these options choose.
-    pub fn settings(&self) -> ViewSettings {
-        ViewSettings {
-            weights: self.scores.fusion_weights(),
+    /// The draw settings these options choose.
+    pub fn settings(&self) -> DrawSettings {
+        DrawSettings {
+            fusion: FusionParams {
+                weights: self.scores.fusion_weights(),
+                median_kernel: self.scores.median_kernel,
+            },
             threshold: self.scores.decision_threshold(),
             colormap: self.colormap,
             auto_range: self.auto_range,
-            median_kernel: self.scores.median_kernel,
         }
     }
 

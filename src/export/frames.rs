@@ -10,8 +10,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use image::RgbaImage;
 
 use crate::render::{
-    DashboardInput, DashboardOptions, FrameScene, FrameView, Provenance, ScoreLabels,
-    TimelineInput, ViewSettings, draw_frame_view,
+    DashboardInput, DashboardOptions, DrawSettings, FrameScene, FrameView, Provenance, ScoreLabels,
+    TimelineInput, draw_frame_view,
 };
 use crate::score::{FlowProvider, FlowSource, PixelReferenceMode, ScoreCache, ScoreSeries};
 use crate::sequence::Scenario;
@@ -25,7 +25,7 @@ pub struct FrameRenderer<'a> {
     scenario: &'a Scenario,
     cache: &'a ScoreCache,
     series: ScoreSeries,
-    settings: ViewSettings,
+    settings: DrawSettings,
     options: DashboardOptions,
     flow: FlowSource,
 }
@@ -33,12 +33,12 @@ pub struct FrameRenderer<'a> {
 impl<'a> FrameRenderer<'a> {
     /// A renderer fusing `cache` with `settings` against the per-frame anomaly flags
     /// `labels` (the ground truth, or the analyst's labels), drawing with `settings`'
-    /// options ([`ViewSettings::options`]); flow is read from `flow`.
+    /// options ([`DrawSettings::options`]); flow is read from `flow`.
     pub fn new(
         scenario: &'a Scenario,
         cache: &'a ScoreCache,
         labels: &[bool],
-        settings: ViewSettings,
+        settings: DrawSettings,
         flow: FlowSource,
     ) -> Self {
         let options = settings.options(cache.table());
@@ -50,15 +50,15 @@ impl<'a> FrameRenderer<'a> {
         scenario: &'a Scenario,
         cache: &'a ScoreCache,
         labels: &[bool],
-        settings: ViewSettings,
+        settings: DrawSettings,
         options: DashboardOptions,
         flow: FlowSource,
     ) -> Self {
         let series = ScoreSeries::compute(
             cache.table(),
             labels,
-            &settings.weights,
-            settings.median_kernel,
+            &settings.fusion.weights,
+            settings.fusion.median_kernel,
         );
         Self {
             scenario,
@@ -76,7 +76,7 @@ impl<'a> FrameRenderer<'a> {
     }
 
     /// The view settings.
-    pub fn settings(&self) -> &ViewSettings {
+    pub fn settings(&self) -> &DrawSettings {
         &self.settings
     }
 
@@ -107,8 +107,8 @@ impl<'a> FrameRenderer<'a> {
             model_hash: key.model.0,
             boxes: key.boxes.clone(),
             flow: key.flow.clone(),
-            weights: self.settings.weights,
-            median_kernel: self.settings.median_kernel,
+            weights: self.settings.fusion.weights,
+            median_kernel: self.settings.fusion.median_kernel,
             threshold: self.settings.threshold,
         }
     }
@@ -142,7 +142,7 @@ impl<'a> FrameRenderer<'a> {
             self.scenario,
             self.cache,
             index,
-            &self.settings.weights,
+            &self.settings.fusion.weights,
             PixelReferenceMode::Training,
             flows,
         )?;

@@ -50,5 +50,5 @@ pub use frame_view::{
 pub use frame_views::{FrameView, draw_frame_view};
 pub use overlay::{LABELLED_BOXES, SceneObject, ScoreScale};
 pub use pred_view::{PredViewInput, PredViewOptions, pred_view};
-pub use scene::{FrameScene, ViewSettings, reference_error_range};
+pub use scene::{DrawSettings, FrameScene, reference_error_range};
 pub use timeline::{TimelineInput, TimelineLayout, TimelineOptions, timeline};

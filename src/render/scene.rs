@@ -1,6 +1,6 @@
 //! What the views show of one frame, gathered from a scenario and its score cache
 //! ([`FrameScene`]: image, scored objects and their maps, heatmap, mask, flow), and the
-//! analyst's choices every view of a scenario shares ([`ViewSettings`]). The numbers
+//! fusion, threshold and colours every view of a scenario is drawn with ([`DrawSettings`]). The numbers
 //! (the score series, the reference threshold) are `score`'s.
 
 use std::sync::Arc;
@@ -8,8 +8,9 @@ use std::sync::Arc;
 use image::{GrayImage, RgbImage};
 
 use crate::score::{
-    FlowProvider, FrameFusion, FusionWeights, Heatmap, HeatmapScratch, ObjectMaps, ObjectScore,
-    PixelReferenceMode, ScoreCache, ScoreSeries, ScoreTable, compose_heatmap, reference_threshold,
+    FlowProvider, FrameFusion, FusionParams, FusionWeights, Heatmap, HeatmapScratch, ObjectMaps,
+    ObjectScore, PixelReferenceMode, ScoreCache, ScoreSeries, ScoreTable, compose_heatmap,
+    reference_threshold,
 };
 use crate::sequence::{FlowField, FrameId, Scenario};
 
@@ -112,7 +113,7 @@ impl FrameScene {
         &self,
         scenario: &str,
         series: &ScoreSeries,
-        settings: &ViewSettings,
+        settings: &DrawSettings,
     ) -> Caption {
         let score = series
             .filtered
@@ -126,7 +127,7 @@ impl FrameScene {
             frame_id: self.frame_id.map(|id| id.0),
             frame_score: score,
             threshold: Some(settings.threshold),
-            weights: Some(settings.weights),
+            weights: Some(settings.fusion.weights),
             truth: series.truth.get(self.index).copied(),
         }
     }
@@ -162,30 +163,31 @@ impl FrameScene {
     }
 }
 
-/// The analyst's choices that every view of a scenario shares.
+/// What every view of a scenario is drawn with: the scores' fusion and threshold (the
+/// viewer's from its `app::ViewSettings`, the CLI's from its options) and the colours.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ViewSettings {
-    /// Fusion weights.
-    pub weights: FusionWeights,
+pub struct DrawSettings {
+    /// Fusion weights and median filter of the frame scores.
+    pub fusion: FusionParams,
     /// Decision threshold on the filtered frame score.
     pub threshold: f64,
     /// Colormap of heatmaps, error maps and boxes.
     pub colormap: Colormap,
     /// Heatmap range per frame instead of the model's reference range.
     pub auto_range: bool,
-    /// Median-filter kernel of the filtered score.
-    pub median_kernel: usize,
 }
 
-impl Default for ViewSettings {
+impl Default for DrawSettings {
     fn default() -> Self {
         let weights = FusionWeights::default();
         Self {
-            weights,
+            fusion: FusionParams {
+                weights,
+                median_kernel: 17,
+            },
             threshold: reference_threshold(&weights),
             colormap: Colormap::default(),
             auto_range: false,
-            median_kernel: 17,
         }
     }
 }
@@ -197,7 +199,7 @@ pub fn reference_error_range(p: &PixelStats) -> Option<(f32, f32)> {
     (high.is_finite() && high > 0.0).then_some((0.0, high))
 }
 
-impl ViewSettings {
+impl DrawSettings {
     /// The options of every view for scores of `table` (ranges from its model's training
     /// statistics).
     pub fn options(&self, table: &ScoreTable) -> DashboardOptions {
@@ -207,7 +209,7 @@ impl ViewSettings {
         options.frame.range = if self.auto_range {
             HeatRange::AutoPerFrame
         } else {
-            HeatRange::reference(&self.weights)
+            HeatRange::reference(&self.fusion.weights)
         };
         options.frame.box_scale = scale;
         options.pred.colormap = self.colormap;

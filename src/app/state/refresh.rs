@@ -2,7 +2,7 @@
 //! the scenario on screen (with its large frame cache), and re-fusing every scored
 //! scenario after a change of weights, filter, threshold or reference.
 
-use crate::render::{DashboardOptions, ViewSettings as RenderSettings};
+use crate::render::{DashboardOptions, DrawSettings};
 use crate::score::{FusionParams, reference_threshold};
 
 use crate::app::analysis::{DatasetMetrics, ScenarioAnalysis};
@@ -24,14 +24,16 @@ pub const BACKGROUND_FRAME_CACHE: usize = 8 << 20;
 impl AppState {
     /// The settings `render` draws with: the analyst's weights, filter and colormap and the
     /// threshold in effect.
-    pub fn render_settings(&self) -> RenderSettings {
+    pub fn render_settings(&self) -> DrawSettings {
         let settings = &self.settings;
-        RenderSettings {
-            weights: settings.weights,
+        DrawSettings {
+            fusion: FusionParams {
+                weights: settings.weights,
+                median_kernel: settings.median_kernel,
+            },
             threshold: self.threshold,
             colormap: settings.colormap,
             auto_range: false,
-            median_kernel: settings.median_kernel,
         }
     }
 
