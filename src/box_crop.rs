@@ -1,6 +1,6 @@
 //! The crop-and-resize HF²-VAD applies to an object box, shared by the model's cubes
-//! (`model::stc`) and the flow metrics on box crops (`flow::metrics`), so both see the same
-//! pixels: the box's edges are rounded up (columns ⌈x1⌉…⌈x2⌉−1, rows ⌈y1⌉…⌈y2⌉−1, clamped
+//! (`model::stc`), the flow metrics on box crops (`flow::metrics`) and the pixel heatmap
+//! that paints the maps back (`score::fusion`), so all of them agree on the pixels: the box's edges are rounded up (columns ⌈x1⌉…⌈x2⌉−1, rows ⌈y1⌉…⌈y2⌉−1, clamped
 //! to the image) and the crop is resized to P×P the way OpenCV's `INTER_LINEAR` samples
 //! (half-pixel centres, edge clamping, source positions in double precision, weights and
 //! blending in single precision, horizontal before vertical).

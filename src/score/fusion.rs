@@ -23,6 +23,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::box_crop;
 use crate::eval::{RobustStats, median_filter};
 use crate::model::TrainingStats;
 
@@ -255,35 +256,17 @@ impl PixelAffine {
     }
 }
 
-/// OpenCV `INTER_LINEAR` source taps for `out` destination pixels sampled from `len`
-/// source pixels: (left index, right index, weight of the right one).
+/// The `INTER_LINEAR` taps ([`crate::box_crop::taps`]) for `out` destination pixels
+/// sampled from `len` source pixels, into `taps`.
 fn linear_taps(len: usize, out: usize, taps: &mut Vec<(usize, usize, f32)>) {
     taps.clear();
-    let scale = len as f64 / out as f64;
-    let last = len.saturating_sub(1);
-    for d in 0..out {
-        let f = (d as f64 + 0.5) * scale - 0.5;
-        let s = f.floor();
-        let (i, w) = if s < 0.0 {
-            (0, 0.0)
-        } else if s as usize >= last {
-            (last, 0.0)
-        } else {
-            (s as usize, f - s)
-        };
-        taps.push((i, (i + 1).min(last), w as f32));
-    }
+    taps.extend((0..out).map(|d| box_crop::taps(d, len as u32, out)));
 }
 
-/// Pixel range [start, end) of a box side after the cube's rounding (⌈lo⌉ … ⌈hi⌉ − 1),
-/// clipped to `0..size`; `None` when empty.
+/// Pixel range [start, end) of a box side after the cube's rounding
+/// ([`crate::box_crop::crop_range`]), as indices.
 fn pixel_span(lo: f32, hi: f32, size: u32) -> Option<(usize, usize)> {
-    if !(lo.is_finite() && hi.is_finite()) {
-        return None;
-    }
-    let start = lo.ceil().clamp(0.0, size as f32) as usize;
-    let end = hi.ceil().clamp(0.0, size as f32) as usize;
-    (end > start).then_some((start, end))
+    box_crop::crop_range(lo, hi, size).map(|(start, end)| (start as usize, end as usize))
 }
 
 /// Reusable buffers of heatmap composition (keeps the per-frame path allocation-free).
