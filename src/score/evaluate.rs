@@ -124,17 +124,7 @@ pub fn scored_box_agreement(
         let scored: Vec<BoxRecord> = table
             .frame_objects(i)
             .iter()
-            .map(|o| BoxRecord {
-                frame: id,
-                track_id: o.track_id,
-                x1: o.bbox[0],
-                y1: o.bbox[1],
-                x2: o.bbox[2],
-                y2: o.bbox[3],
-                class: o.class,
-                score: o.confidence,
-                anomalous: false,
-            })
+            .map(|o| o.box_record(id))
             .collect();
         stats.add_frame(&scenario.boxes(i)?, &scored);
     }
@@ -189,17 +179,7 @@ pub fn top_object_hits(
         });
         let Some(top) = top else { continue };
         out.frames += 1;
-        let scored = BoxRecord {
-            frame: table.frames[i].id,
-            track_id: top.track_id,
-            x1: top.bbox[0],
-            y1: top.bbox[1],
-            x2: top.bbox[2],
-            y2: top.bbox[3],
-            class: top.class,
-            score: top.confidence,
-            anomalous: false,
-        };
+        let scored = top.box_record(table.frames[i].id);
         let hit = scenario.boxes(i)?.iter().filter(|b| b.anomalous).any(|b| {
             (top.track_id != 0 && b.track_id == top.track_id) || box_iou(b, &scored) >= 0.5
         });

@@ -6,7 +6,7 @@ use serde::Serialize;
 
 use crate::eval::RobustStats;
 use crate::model::{PixelStats, TrainingStats};
-use crate::sequence::FrameId;
+use crate::sequence::{BoxRecord, FrameId};
 
 use super::key::CacheKey;
 
@@ -73,6 +73,23 @@ pub struct ObjectScore {
     pub s_r: f32,
     /// S_p: summed squared frame-prediction error.
     pub s_p: f32,
+}
+
+impl ObjectScore {
+    /// The object's box as a [`BoxRecord`] of frame `frame` (not flagged anomalous).
+    pub fn box_record(&self, frame: FrameId) -> BoxRecord {
+        BoxRecord {
+            frame,
+            track_id: self.track_id,
+            x1: self.bbox[0],
+            y1: self.bbox[1],
+            x2: self.bbox[2],
+            y2: self.bbox[3],
+            class: self.class,
+            score: self.confidence,
+            anomalous: false,
+        }
+    }
 }
 
 /// The per-pixel data of one scored object, each plane P×P row-major.
