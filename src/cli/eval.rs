@@ -126,27 +126,28 @@ struct JsonReport<'a> {
     baselines: Option<&'a [EvalRow]>,
 }
 
-/// The baseline rows over `scored` (one series per baseline, box source and scenario,
-/// labelled "baseline: NAME (BOX SOURCE)") and their source labels by baseline.
+/// The row label of `baseline` scored on the boxes of `box_source` (a box source label).
+fn baseline_label(baseline: Baseline, box_source: &str) -> String {
+    format!("baseline: {} ({box_source})", baseline.name())
+}
+
+/// The baseline rows over the scored scenarios: `items[k]` holds the scores of
+/// `scored[k]`. Rows come baseline by baseline, each with its box sources in order.
 fn baseline_rows(
+    items: &[ScenarioScores],
     scored: &[Scored],
-    sources: &[BoxSource],
     flow: FlowSource,
     options: &FrameMetricOptions,
     grouping: Grouping,
 ) -> anyhow::Result<Vec<EvalRow>> {
-    let per_source = scored.len() / sources.len().max(1);
-    let series: Vec<Vec<FrameSeries>> = scored
+    let series: Vec<Vec<(usize, FrameSeries)>> = items
         .par_iter()
-        .enumerate()
-        .map(|(k, s)| {
-            let source = &sources[k / per_source.max(1)];
-            let table = s.cache.table();
+        .zip(scored)
+        .map(|(item, s)| {
             let mut flows = FlowProvider::new(s.scenario, flow);
-            let meta = s.scenario.meta();
             let mut out = Vec::new();
-            for baseline in Baseline::ALL {
-                let raw = baseline_frame_scores(baseline, s.scenario, table, &mut flows)
+            for (b, baseline) in Baseline::ALL.into_iter().enumerate() {
+                let raw = baseline_frame_scores(baseline, s.scenario, &item.table, &mut flows)
                     .with_context(|| {
                         format!(
                             "baseline {} of {}",
@@ -155,27 +156,27 @@ fn baseline_rows(
                         )
                     })?;
                 if let Some(raw) = raw {
-                    out.push(FrameSeries {
-                        name: s.scenario.name().to_string(),
-                        domain: meta.domain,
-                        weather: meta.weather,
-                        source: format!("baseline: {} ({})", baseline.name(), source.label()),
-                        labels: s.scenario.frame_labels().flags.clone(),
-                        raw,
-                        skip_first: table.meta.clip_hist as usize,
-                    });
+                    out.push((
+                        b,
+                        FrameSeries {
+                            name: item.name.clone(),
+                            domain: item.domain,
+                            weather: item.weather,
+                            source: baseline_label(baseline, &item.box_source),
+                            labels: item.labels.clone(),
+                            raw,
+                            skip_first: item.table.meta.clip_hist as usize,
+                        },
+                    ));
                 }
             }
             Ok(out)
         })
         .collect::<anyhow::Result<_>>()?;
-    // Rows grouped by baseline, then box source, as they were generated per scenario.
-    let mut flat: Vec<FrameSeries> = series.into_iter().flatten().collect();
-    flat.sort_by_key(|s| {
-        Baseline::ALL
-            .iter()
-            .position(|b| s.source.starts_with(&format!("baseline: {}", b.name())))
-    });
+    // Stable: within a baseline, box sources and scenarios keep their order.
+    let mut tagged: Vec<(usize, FrameSeries)> = series.into_iter().flatten().collect();
+    tagged.sort_by_key(|(b, _)| *b);
+    let flat: Vec<FrameSeries> = tagged.into_iter().map(|(_, s)| s).collect();
     Ok(evaluate_series(&flat, options, grouping)?)
 }
 
@@ -190,12 +191,11 @@ fn margin_lines(rows: &[EvalRow], baselines: &[EvalRow]) -> Vec<String> {
             let best = baselines
                 .iter()
                 .filter(|b| b.domain.is_none() && b.weather.is_none())
-                .filter(|b| b.box_source.ends_with(&format!("({})", r.box_source)))
                 .filter(|b| {
                     Baseline::ALL
-                        .iter()
+                        .into_iter()
                         .filter(|x| !x.uses_ego_data())
-                        .any(|x| b.box_source.starts_with(&format!("baseline: {}", x.name())))
+                        .any(|x| b.box_source == baseline_label(x, &r.box_source))
                 })
                 .filter_map(|b| Some((auroc(b)?, b.box_source.as_str())))
                 .max_by(|a, b| a.0.total_cmp(&b.0))?;
@@ -331,8 +331,8 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
 
     let baselines = if args.baselines {
         Some(baseline_rows(
+            &items,
             &scored,
-            &sources,
             args.run.flow,
             &options,
             grouping,
