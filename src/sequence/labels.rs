@@ -7,13 +7,13 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::csv_table::CsvTable;
+use super::discovery::ScenarioFiles;
 use super::images::read_semantic;
-use super::index::FrameRun;
+use super::index::{FrameIndex, FrameRun};
 use super::keyvalue::read_key_values;
 use super::layout::FRAME_LABELS_FILE;
 use super::problem::FileProblem;
-use super::scenario::Scenario;
-use super::{AnomalyType, FrameId, Modality, SequenceError, palette};
+use super::{AnomalyType, FrameId, Modality, ScenarioMeta, SequenceError, palette};
 
 /// The header of `frame_labels.csv`.
 pub const FRAME_LABELS_HEADER: &str = "frame,anomaly";
@@ -120,6 +120,35 @@ impl FrameLabels {
     }
 }
 
+/// What label derivation reads of an opened scenario: its folder, files, frame index and
+/// metadata. A view rather than the scenario itself, so that this file sits below
+/// `scenario.rs` (which caches the derived labels) instead of importing it back.
+#[derive(Debug, Clone, Copy)]
+pub struct LabelInputs<'a> {
+    /// The scenario folder.
+    pub root: &'a Path,
+    /// Every per-frame file, by modality.
+    pub files: &'a ScenarioFiles,
+    /// The frame index (sorted ids).
+    pub index: &'a FrameIndex,
+    /// The scenario's metadata.
+    pub meta: &'a ScenarioMeta,
+}
+
+impl LabelInputs<'_> {
+    fn len(&self) -> usize {
+        self.index.len()
+    }
+
+    fn has(&self, modality: Modality) -> bool {
+        self.files.of(modality).is_some_and(|f| !f.is_empty())
+    }
+
+    fn file(&self, modality: Modality, index: usize) -> Option<&Path> {
+        self.files.file(modality, self.index.frame_id(index)?)
+    }
+}
+
 /// Derives the flags of `scenario`, in order of preference:
 /// 1. `frame_labels.csv` (frames without a row count as normal and are noted);
 /// 2. the semantic images: a frame is anomalous when any pixel has an anomaly id (100,
@@ -132,9 +161,9 @@ impl FrameLabels {
 ///
 /// A source that cannot be read at all (e.g. a malformed `frame_labels.csv`) is noted and
 /// the next one is tried; single unreadable files count as normal frames and are noted.
-pub fn derive_frame_labels(scenario: &Scenario) -> FrameLabels {
+pub fn derive_frame_labels(scenario: &LabelInputs<'_>) -> FrameLabels {
     let mut problems = Vec::new();
-    let file = scenario.root().join(FRAME_LABELS_FILE);
+    let file = scenario.root.join(FRAME_LABELS_FILE);
     if file.is_file() {
         match read_frame_labels(&file) {
             Ok(rows) => return labels_from_rows(scenario, &file, &rows, problems),
@@ -185,7 +214,7 @@ pub fn derive_frame_labels(scenario: &Scenario) -> FrameLabels {
 }
 
 fn labels_from_rows(
-    scenario: &Scenario,
+    scenario: &LabelInputs<'_>,
     file: &Path,
     rows: &[(FrameId, bool)],
     mut problems: Vec<FileProblem>,
@@ -194,7 +223,7 @@ fn labels_from_rows(
     let mut covered = vec![false; scenario.len()];
     let mut unknown = Vec::new();
     for &(id, anomalous) in rows {
-        match scenario.index_of(id) {
+        match scenario.index.index_of(id) {
             Some(index) => {
                 flags[index] = anomalous;
                 covered[index] = true;
@@ -208,7 +237,7 @@ fn labels_from_rows(
             format!("rows for frames that do not exist: {}", unknown.join(", ")),
         ));
     }
-    let uncovered = scenario.frame_index().runs(|i| !covered[i]);
+    let uncovered = scenario.index.runs(|i| !covered[i]);
     if !uncovered.is_empty() {
         problems.push(FileProblem::new(
             file,
@@ -227,7 +256,7 @@ fn labels_from_rows(
 
 /// Decides each frame that has a `modality` file, in parallel; unreadable files are noted.
 fn flags_from_files(
-    scenario: &Scenario,
+    scenario: &LabelInputs<'_>,
     modality: Modality,
     decide: impl Fn(&Path) -> Result<bool, SequenceError> + Sync,
 ) -> (Vec<bool>, Vec<FileProblem>) {
@@ -246,12 +275,12 @@ fn flags_from_files(
         })
         .collect();
     let without_file = scenario
-        .frame_index()
+        .index
         .runs(|i| scenario.file(modality, i).is_none());
     if !without_file.is_empty() {
-        let folder = scenario.files().folders.get(&modality);
+        let folder = scenario.files.folders.get(&modality);
         problems.push(FileProblem::new(
-            folder.map_or(scenario.root(), PathBuf::as_path),
+            folder.map_or(scenario.root, PathBuf::as_path),
             format!(
                 "no {} file for frames {} (taken as normal)",
                 modality.folder(),
@@ -262,10 +291,10 @@ fn flags_from_files(
     (flags, problems)
 }
 
-fn flags_from_window(scenario: &Scenario) -> Option<Vec<bool>> {
-    let meta = scenario.meta();
+fn flags_from_window(scenario: &LabelInputs<'_>) -> Option<Vec<bool>> {
+    let meta = scenario.meta;
     if let Some(window) = meta.anomaly_window {
-        let ids = scenario.frame_index().ids();
+        let ids = scenario.index.ids();
         return Some(
             ids.iter()
                 .map(|id| (window.start..=window.end).contains(id))

@@ -20,7 +20,7 @@ use super::images::{
 };
 use super::index::FrameIndex;
 use super::keyvalue::read_key_values;
-use super::labels::{FrameLabels, derive_frame_labels};
+use super::labels::{FrameLabels, LabelInputs, derive_frame_labels};
 use super::layout::{BOXES_FILE, DETECTIONS_FILE, SCENARIO_JSON_FILE};
 use super::meta::{
     find_anovox_config, merge_anovox_config, read_scenario_json, read_sensor_setup_camera,
@@ -437,7 +437,14 @@ impl Scenario {
     /// Per-frame anomaly flags and their source, derived once (see
     /// [`super::labels::derive_frame_labels`] for the order of preference).
     pub fn frame_labels(&self) -> &FrameLabels {
-        self.labels.get_or_init(|| derive_frame_labels(self))
+        self.labels.get_or_init(|| {
+            derive_frame_labels(&LabelInputs {
+                root: &self.root,
+                files: &self.files,
+                index: &self.index,
+                meta: &self.meta,
+            })
+        })
     }
 
     /// Where [`Scenario::boxes`] come from (decided when the scenario is opened).
