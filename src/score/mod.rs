@@ -35,6 +35,7 @@ pub mod evaluate;
 pub mod flows;
 pub mod fusion;
 pub mod motion;
+pub mod pixel_roc;
 pub mod run;
 mod scorer;
 pub mod series;
@@ -51,9 +52,8 @@ pub use cache::{
 };
 pub use error::ScoreError;
 pub use evaluate::{
-    EvalRow, FrameSeries, Grouping, PixelRoc, SWEEP_VALUES, ScenarioScores, SweepRow,
-    TopObjectHits, add_scenario_pixels, add_scenario_pixels_each, evaluate_dataset,
-    evaluate_series, evaluate_table, sweep_grid, sweep_weights, top_object_hits,
+    EvalRow, FrameSeries, Grouping, SWEEP_VALUES, ScenarioScores, SweepRow, TopObjectHits,
+    evaluate_dataset, evaluate_series, evaluate_table, sweep_grid, sweep_weights, top_object_hits,
 };
 pub use flows::{FlowProvider, FlowSource};
 pub use fusion::{
@@ -61,6 +61,7 @@ pub use fusion::{
     compose_heatmap, frame_scores, frame_scores_into, metric_frames,
 };
 pub use motion::MotionParams;
+pub use pixel_roc::{PixelRoc, add_scenario_pixels, add_scenario_pixels_each};
 pub use run::{
     CubeScorer, CubeSource, FrameBoxes, ScenarioCubes, ScoreProgress, ScoreRequest, ScoringPlan,
     run_scoring, score_scenario, score_scenario_with,
