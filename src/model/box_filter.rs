@@ -109,19 +109,10 @@ impl BoxFilter {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sequence::FrameId;
 
     fn bbox(x1: f32, y1: f32, x2: f32, y2: f32) -> BoxRecord {
-        BoxRecord {
-            frame: crate::sequence::FrameId(0),
-            track_id: 1,
-            x1,
-            y1,
-            x2,
-            y2,
-            class: 14,
-            score: 1.0,
-            anomalous: false,
-        }
+        BoxRecord::car(FrameId(0), 1, [x1, y1, x2, y2])
     }
 
     #[test]

@@ -240,17 +240,7 @@ mod tests {
     use crate::sequence::FrameId;
 
     fn bbox(x1: f32, y1: f32, x2: f32, y2: f32) -> BoxRecord {
-        BoxRecord {
-            frame: FrameId(0),
-            track_id: 1,
-            x1,
-            y1,
-            x2,
-            y2,
-            class: 14,
-            score: 1.0,
-            anomalous: false,
-        }
+        BoxRecord::car(FrameId(0), 1, [x1, y1, x2, y2])
     }
 
     fn geometry(clip_hist: usize, patch: usize) -> CubeGeometry {

@@ -82,16 +82,15 @@ pub fn baseline_frame_scores(
         )));
     }
     let object_max = |score: &mut dyn FnMut(usize, &ObjectScore) -> Result<f64, ScoreError>| {
+        // A frame without scored objects scores 0, as the model's zero-error frames do.
         (0..frames)
             .map(|i| {
-                table
-                    .frame_objects(i)
-                    .iter()
-                    .map(|o| score(i, o))
-                    .try_fold(None, |acc: Option<f64>, s| {
-                        s.map(|s| Some(acc.map_or(s, |a| a.max(s))))
-                    })
-                    .map(|m| m.unwrap_or(0.0))
+                let mut max: Option<f64> = None;
+                for object in table.frame_objects(i) {
+                    let s = score(i, object)?;
+                    max = Some(max.map_or(s, |m| m.max(s)));
+                }
+                Ok(max.unwrap_or(0.0))
             })
             .collect::<Result<Vec<f64>, ScoreError>>()
     };

@@ -85,6 +85,22 @@ pub struct BoxRecord {
 }
 
 impl BoxRecord {
+    /// A ground-truth car box (class 14, score 1, not anomalous) of `frame` and `track_id`
+    /// with corners `[x1, y1, x2, y2]`; other fields can be set on the result.
+    pub fn car(frame: FrameId, track_id: u64, [x1, y1, x2, y2]: [f32; 4]) -> Self {
+        Self {
+            frame,
+            track_id,
+            x1,
+            y1,
+            x2,
+            y2,
+            class: 14,
+            score: 1.0,
+            anomalous: false,
+        }
+    }
+
     /// Box width in pixels.
     pub fn width(&self) -> f32 {
         self.x2 - self.x1
