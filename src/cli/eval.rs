@@ -14,8 +14,8 @@ use vadscope::score::{
     Baseline, BoxSource, EvalRow, FlowProvider, FlowSource, FrameMetricOptions, FrameSeries,
     FusionWeights, Grouping, PixelReferenceMode, PixelRoc, ScenarioScores, ScoreCache, SweepRow,
     TableFormat, TopObjectHits, add_scenario_pixels_each, baseline_frame_scores, evaluate_series,
-    evaluate_table, render_eval_table, render_sweep_table, sweep_grid, sweep_weights,
-    top_object_hits,
+    evaluate_table, object_rows, render_eval_table, render_sweep_table, sweep_grid, sweep_weights,
+    top_object_hits, write_object_csv,
 };
 use vadscope::sequence::Scenario;
 
@@ -71,6 +71,11 @@ pub struct EvalArgs {
     /// by how much the model beats the best image-only one.
     #[arg(long)]
     baselines: bool,
+    /// Also write every scored object to this CSV file (scenario, frame, box, S_r, S_p,
+    /// fused score, whether it sets its frame's score and whether it is the anomalous
+    /// object): which object a model flags, frame by frame.
+    #[arg(long, value_name = "FILE")]
+    objects: Option<PathBuf>,
     /// IoU at which a scored box counts as finding a ground-truth box.
     #[arg(long, default_value_t = 0.5, value_name = "IOU")]
     iou: f32,
@@ -327,6 +332,20 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
             Some((_, total)) => total.merge(hits),
             None => top_object.push((item.box_source.clone(), hits)),
         }
+    }
+
+    if let Some(path) = &args.objects {
+        let mut rows = Vec::new();
+        for (item, s) in items.iter().zip(&scored) {
+            rows.extend(object_rows(
+                s.scenario,
+                &item.box_source,
+                &item.table,
+                &weights,
+            )?);
+        }
+        write_object_csv(path, &rows)?;
+        eprintln!("{} scored objects -> {}", rows.len(), path.display());
     }
 
     let baselines = if args.baselines {

@@ -16,9 +16,10 @@ use crate::eval::{MetricsError, ScoreMetrics, macro_auroc};
 use crate::sequence::{BoxRecord, Domain, Scenario, Weather};
 
 use super::ScoreError;
-use super::boxes::{BoxMatchStats, box_iou};
+use super::boxes::BoxMatchStats;
 use super::cache::{ModelKey, ScoreCache, ScoreTable};
 use super::fusion::{FrameFusion, FrameMetricOptions, FusionWeights, frame_scores, metric_frames};
+use super::objects::is_anomalous_object;
 use super::pixel_roc::PixelRoc;
 use super::run::ScoreRequest;
 
@@ -169,10 +170,7 @@ pub fn top_object_hits(
         let Some(top) = top else { continue };
         out.frames += 1;
         let scored = top.box_record(table.frames[i].id);
-        let hit = scenario.boxes(i)?.iter().filter(|b| b.anomalous).any(|b| {
-            (top.track_id != 0 && b.track_id == top.track_id) || box_iou(b, &scored) >= 0.5
-        });
-        out.hits += usize::from(hit);
+        out.hits += usize::from(is_anomalous_object(top, &scored, &scenario.boxes(i)?));
     }
     Ok(out)
 }

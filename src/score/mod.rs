@@ -35,6 +35,7 @@ pub mod evaluate;
 pub mod flows;
 pub mod fusion;
 pub mod motion;
+pub mod objects;
 pub mod pixel_roc;
 pub mod run;
 mod scorer;
@@ -61,6 +62,7 @@ pub use fusion::{
     compose_heatmap, frame_scores, frame_scores_into, metric_frames,
 };
 pub use motion::MotionParams;
+pub use objects::{ObjectRow, object_rows, write_object_csv};
 pub use pixel_roc::{PixelRoc, add_scenario_pixels, add_scenario_pixels_each};
 pub use run::{
     CubeScorer, CubeSource, FrameBoxes, ScenarioCubes, ScoreProgress, ScoreRequest, ScoringPlan,

@@ -319,6 +319,75 @@ fn baselines_are_scored_on_the_same_frames_beside_the_model() {
 }
 
 #[test]
+fn objects_csv_lists_every_scored_object_with_its_frame_top_and_anomaly() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = tiny_checkpoint(dir.path());
+    let data = dataset(dir.path());
+    let csv = dir.path().join("objects.csv");
+    let json = succeed(&[
+        "eval",
+        data.to_str().unwrap(),
+        "--model",
+        model.to_str().unwrap(),
+        "--by",
+        "none",
+        "--objects",
+        csv.to_str().unwrap(),
+        "--format",
+        "json",
+    ]);
+    let report: Value = serde_json::from_str(&json).expect("JSON");
+    let text = std::fs::read_to_string(&csv).expect("the objects file");
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    let (scenario, frame, anomalous_frame, top, anomalous_object) = (
+        column("scenario"),
+        column("frame"),
+        column("anomalous_frame"),
+        column("top"),
+        column("anomalous_object"),
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let cached: usize = cache_files(&data)
+        .iter()
+        .map(|f| ScoreCache::open(f).unwrap().table().objects.len())
+        .sum();
+    assert_eq!(rows.len(), cached, "one row per cached object");
+
+    let mut tops = std::collections::BTreeMap::new();
+    for row in &rows {
+        assert_eq!(row.len(), header.len(), "{row:?}");
+        *tops.entry((row[scenario], row[frame])).or_insert(0) += usize::from(row[top] == "1");
+        if row[anomalous_object] == "1" {
+            assert_eq!(
+                row[anomalous_frame], "1",
+                "an anomalous object in a normal frame"
+            );
+        }
+    }
+    assert!(
+        tops.values().all(|&n| n == 1),
+        "one top object per frame: {tops:?}"
+    );
+    // The rows agree with the top-object count (metric frames start at clip_hist = 4).
+    let hits = rows
+        .iter()
+        .filter(|r| r[top] == "1" && r[anomalous_object] == "1")
+        .filter(|r| r[frame].parse::<usize>().unwrap() >= 4)
+        .count();
+    assert_eq!(
+        Some(hits as u64),
+        report["top_object"][0][1]["hits"].as_u64(),
+        "{report}"
+    );
+    assert!(
+        rows.iter().any(|r| r[anomalous_object] == "1"),
+        "the braking lead is among the scored objects"
+    );
+}
+
+#[test]
 fn sweep_gives_one_row_per_grid_point() {
     let dir = tempfile::tempdir().unwrap();
     let model = tiny_checkpoint(dir.path());
