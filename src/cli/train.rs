@@ -119,6 +119,13 @@ pub struct TrainArgs {
     /// each on its own as the reference does.
     #[arg(long, conflicts_with = "init")]
     joint_flows: bool,
+    /// Keep the training score statistics per N equal vertical bands of the image (by box
+    /// centre), so each object is z-scored against the normal objects at its place (1: one
+    /// global statistic, the reference). Allowed with --init: it only changes the
+    /// statistics, so `--init RUN/model.safetensors --epochs 0 --score-bands 5` re-derives
+    /// them for a trained model.
+    #[arg(long, value_name = "N")]
+    score_bands: Option<usize>,
     /// Worker threads of the CPU backend (default: all cores).
     #[arg(long, value_name = "N")]
     threads: Option<usize>,
@@ -196,6 +203,9 @@ fn with_model_options(mut model: ModelConfig, args: &TrainArgs) -> anyhow::Resul
     }
     if args.joint_flows {
         model.joint_flows = true;
+    }
+    if let Some(bands) = args.score_bands {
+        model.score_bands = bands;
     }
     model
         .validate()
@@ -440,9 +450,9 @@ impl Progress {
                     None => println!("{line}"),
                 }
             }
-            TrainEvent::StatsDone(stats) => {
+            TrainEvent::StatsDone(ref stats) => {
                 self.finish();
-                print_stats(&stats);
+                print_stats(stats);
             }
         }
     }
@@ -463,6 +473,18 @@ fn print_stats(stats: &TrainingStats) {
         stats.frame_score.mean,
         stats.frame_score.std
     );
+    for (i, band) in stats.bands.iter().enumerate() {
+        println!(
+            "  band {}/{}: {} cubes, S_r mean {:.4} std {:.4}; S_p mean {:.4} std {:.4}",
+            i + 1,
+            stats.bands.len(),
+            band.cubes,
+            band.flow_score.mean,
+            band.flow_score.std,
+            band.frame_score.mean,
+            band.frame_score.std
+        );
+    }
 }
 
 fn print_report(report: &TrainReport) {

@@ -137,7 +137,21 @@ pub struct ModelConfig {
     /// reference (`false`, the default) reconstructs each flow on its own.
     #[serde(default)]
     pub joint_flows: bool,
+    /// Equal vertical bands of the image whose objects get training score moments of their
+    /// own ([`super::TrainingStats::bands`], by the box centre): an object is then scored
+    /// against the normal objects *at its place*. 1 (the reference, and the default of older
+    /// checkpoints) keeps one global z-score.
+    #[serde(default = "one_band")]
+    pub score_bands: usize,
 }
+
+/// The reference's single, global score statistic.
+fn one_band() -> usize {
+    1
+}
+
+/// Most score bands a model may use.
+pub const MAX_SCORE_BANDS: usize = 16;
 
 impl ModelConfig {
     /// The reference configuration, spec Part B exactly (69.2 M parameters, ≈2.1 GMAC per
@@ -159,6 +173,7 @@ impl ModelConfig {
             conventions: InputConventions::vadscope(),
             box_filter: BoxFilter::KEEP_ALL,
             joint_flows: false,
+            score_bands: 1,
         }
     }
 
@@ -298,6 +313,12 @@ impl ModelConfig {
             return bad(format!("flow scale factors ({x}, {y}) must be positive"));
         }
         self.box_filter.validate()?;
+        if !(1..=MAX_SCORE_BANDS).contains(&self.score_bands) {
+            return bad(format!(
+                "score_bands {} must lie in 1..={MAX_SCORE_BANDS}",
+                self.score_bands
+            ));
+        }
         Ok(())
     }
 
@@ -424,6 +445,7 @@ mod tests {
             drop_truncated: true,
         };
         c.joint_flows = true;
+        c.score_bands = 5;
         let back: ModelConfig =
             serde_json::from_str(&serde_json::to_string(&c).expect("serialise")).expect("parse");
         assert_eq!(back, c);
@@ -432,10 +454,15 @@ mod tests {
         let object = old.as_object_mut().expect("object");
         object.remove("box_filter");
         object.remove("joint_flows");
+        object.remove("score_bands");
         let old: ModelConfig = serde_json::from_value(old).expect("parse old");
         assert_eq!(old, ModelConfig::compact());
         assert_eq!(old.box_filter, BoxFilter::KEEP_ALL);
         assert!(!old.joint_flows);
+        assert_eq!(old.score_bands, 1);
+        let mut bad = ModelConfig::compact();
+        bad.score_bands = 0;
+        assert!(bad.validate().is_err());
     }
 
     #[test]

@@ -34,5 +34,5 @@ pub use hf2vad::{Hf2Vad, Hf2VadOutput};
 pub use inference::{CubeResult, Detector, InferenceLatents};
 pub use memae::{MemAeOutput, MlMemAeSc};
 pub use rng::NoiseRng;
-pub use stats::{PixelStats, ScoreStats, StatsAccumulator, TrainingStats};
+pub use stats::{BandStats, PixelStats, ScoreStats, StatsAccumulator, TrainingStats, band_of};
 pub use vunet::{Latents, Vunet, VunetOutput};

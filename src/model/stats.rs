@@ -1,6 +1,12 @@
 //! Training statistics stored with a model: mean and population std of the per-cube scores
 //! S_r and S_p (for the frame-level z-scores, spec §6) and median / quartiles of the per-pixel
 //! squared errors (for the pixel-level robust scaling, spec Part A.6), plus their accumulator.
+//!
+//! Beyond the reference, the score moments can also be kept per vertical band of the image
+//! ([`TrainingStats::bands`], by the box centre's column): objects beside the road (parked
+//! and oncoming cars) have much larger flow errors in normal driving than the car ahead, so
+//! one global z-score lets them set every normal frame's score; a z-score against the
+//! objects of the same band asks "unusual *for an object there*" instead.
 
 use serde::{Deserialize, Serialize};
 
@@ -28,8 +34,26 @@ pub struct PixelStats {
     pub total: u64,
 }
 
-/// Everything the scoring needs from the training data.
+/// S_r and S_p moments of the training cubes whose box centre lies in one band.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct BandStats {
+    /// Training cubes in the band.
+    pub cubes: u64,
+    /// S_r of those cubes.
+    pub flow_score: ScoreStats,
+    /// S_p of those cubes.
+    pub frame_score: ScoreStats,
+}
+
+/// The band (of `bands` equal vertical bands of the image) holding a box centre at
+/// `centre_x`, a fraction of the frame width; centres outside [0, 1) fall in the end bands.
+pub fn band_of(centre_x: f32, bands: usize) -> usize {
+    let bands = bands.max(1);
+    ((centre_x * bands as f32).floor().max(0.0) as usize).min(bands - 1)
+}
+
+/// Everything the scoring needs from the training data.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrainingStats {
     /// Number of training cubes.
     pub cubes: u64,
@@ -41,6 +65,25 @@ pub struct TrainingStats {
     pub flow_pixel: PixelStats,
     /// Per-element squared frame errors (all colour channels).
     pub frame_pixel: PixelStats,
+    /// S_r/S_p moments per vertical band of the image, left to right (empty: the global
+    /// moments above apply everywhere, as in the reference). A band with fewer than
+    /// [`MIN_BAND_CUBES`] training cubes keeps the global moments.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bands: Vec<BandStats>,
+}
+
+/// Fewest training cubes a band needs for moments of its own.
+pub const MIN_BAND_CUBES: u64 = 30;
+
+impl TrainingStats {
+    /// The (S_r, S_p) moments that z-score an object whose box centre lies at `centre_x`
+    /// (a fraction of the frame width): its band's, or the global ones.
+    pub fn moments_at(&self, centre_x: f32) -> (&ScoreStats, &ScoreStats) {
+        match self.bands.get(band_of(centre_x, self.bands.len())) {
+            Some(band) if band.cubes >= MIN_BAND_CUBES => (&band.flow_score, &band.frame_score),
+            _ => (&self.flow_score, &self.frame_score),
+        }
+    }
 }
 
 /// Reservoir sample of a stream of values (Vitter's algorithm R), for quantiles of streams
@@ -108,6 +151,9 @@ pub struct StatsAccumulator {
     cubes: u64,
     flow_scores: Vec<f64>,
     frame_scores: Vec<f64>,
+    /// Band of each pushed cube (empty without bands).
+    cube_bands: Vec<usize>,
+    bands: usize,
     flow_pixels: Reservoir,
     frame_pixels: Reservoir,
     rng: NoiseRng,
@@ -121,10 +167,34 @@ impl StatsAccumulator {
             cubes: 0,
             flow_scores: Vec::new(),
             frame_scores: Vec::new(),
+            cube_bands: Vec::new(),
+            bands: 1,
             flow_pixels: Reservoir::new(pixel_sample),
             frame_pixels: Reservoir::new(pixel_sample),
             rng: NoiseRng::new(seed),
         }
+    }
+
+    /// Also keeps the score moments per each of `bands` vertical bands of the image (1: only
+    /// the global moments); cubes then go in with [`Self::push_at`].
+    pub fn with_bands(mut self, bands: usize) -> Self {
+        self.bands = bands.max(1);
+        self
+    }
+
+    /// Adds one cube whose box centre lies at `centre_x` (a fraction of the frame width).
+    pub fn push_at(
+        &mut self,
+        centre_x: f32,
+        s_r: f32,
+        s_p: f32,
+        flow_error: &[f32],
+        frame_error: &[f32],
+    ) {
+        if self.bands > 1 {
+            self.cube_bands.push(band_of(centre_x, self.bands));
+        }
+        self.push(s_r, s_p, flow_error, frame_error);
     }
 
     /// Adds one cube: its scores and its per-element squared errors.
@@ -147,12 +217,41 @@ impl StatsAccumulator {
                 std: var.sqrt(),
             }
         };
+        let of = |values: &[f64]| {
+            ScoreStats::of(values).unwrap_or(ScoreStats {
+                mean: 0.0,
+                std: 0.0,
+            })
+        };
+        let bands = if self.bands > 1 && self.cube_bands.len() == self.flow_scores.len() {
+            (0..self.bands)
+                .map(|band| {
+                    let pick = |scores: &[f64]| -> Vec<f64> {
+                        scores
+                            .iter()
+                            .zip(&self.cube_bands)
+                            .filter(|(_, b)| **b == band)
+                            .map(|(s, _)| *s)
+                            .collect()
+                    };
+                    let flow = pick(&self.flow_scores);
+                    BandStats {
+                        cubes: flow.len() as u64,
+                        flow_score: of(&flow),
+                        frame_score: of(&pick(&self.frame_scores)),
+                    }
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         TrainingStats {
             cubes: self.cubes,
             flow_score: moments(&self.flow_scores),
             frame_score: moments(&self.frame_scores),
             flow_pixel: self.flow_pixels.stats(),
             frame_pixel: self.frame_pixels.stats(),
+            bands,
         }
     }
 }
@@ -183,6 +282,38 @@ mod tests {
         assert_eq!(s.flow_pixel.sampled, 8);
         assert!((s.flow_pixel.median - 2.5).abs() < 1e-12);
         assert!((s.frame_pixel.iqr - 15.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn band_moments_are_those_of_the_cubes_centred_in_each_band() {
+        let mut acc = StatsAccumulator::new(100, 1).with_bands(3);
+        // Left band: S_r 1 and 3; middle: 10, 20, 30 (× 12 so it has enough cubes); right: none.
+        for (x, r) in [(0.1, 1.0), (0.2, 3.0)] {
+            acc.push_at(x, r, 2.0 * r, &[], &[]);
+        }
+        for _ in 0..12 {
+            for r in [10.0, 20.0, 30.0] {
+                acc.push_at(0.5, r, 0.0, &[], &[]);
+            }
+        }
+        let s = acc.finish();
+        assert_eq!(s.bands.len(), 3);
+        assert_eq!(
+            s.bands.iter().map(|b| b.cubes).collect::<Vec<_>>(),
+            [2, 36, 0]
+        );
+        assert!((s.bands[0].flow_score.mean - 2.0).abs() < 1e-12);
+        assert!((s.bands[0].frame_score.mean - 4.0).abs() < 1e-12);
+        assert!((s.bands[1].flow_score.mean - 20.0).abs() < 1e-12);
+        assert!((s.bands[1].flow_score.std - (200.0f64 / 3.0).sqrt()).abs() < 1e-9);
+        // The middle band has enough cubes for its own moments; the sparse ones fall back.
+        assert_eq!(s.moments_at(0.5).0, &s.bands[1].flow_score);
+        assert_eq!(s.moments_at(0.1).0, &s.flow_score);
+        assert_eq!(s.moments_at(0.9).0, &s.flow_score);
+        assert_eq!(
+            (band_of(-0.2, 3), band_of(0.34, 3), band_of(1.0, 3)),
+            (0, 1, 2)
+        );
     }
 
     #[test]

@@ -70,11 +70,8 @@ impl FrameScene {
         } else {
             cache.frame_maps(index)?
         };
-        let fusion = FrameFusion::new(&table.meta.training, weights);
-        let scores = objects
-            .iter()
-            .map(|o| fusion.object_score(o.s_r, o.s_p))
-            .collect();
+        let fusion = FrameFusion::of_table(table, weights);
+        let scores = objects.iter().map(|o| fusion.object_score(o)).collect();
         let heatmap = if objects.is_empty() {
             None
         } else {

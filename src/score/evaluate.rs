@@ -153,7 +153,7 @@ pub fn top_object_hits(
     weights: &FusionWeights,
     skip_first: usize,
 ) -> Result<TopObjectHits, ScoreError> {
-    let fusion = FrameFusion::new(&table.meta.training, weights);
+    let fusion = FrameFusion::of_table(table, weights);
     let labels = &scenario.frame_labels().flags;
     let mut out = TopObjectHits::default();
     for (i, _) in labels
@@ -162,11 +162,10 @@ pub fn top_object_hits(
         .skip(skip_first)
         .filter(|(_, a)| **a)
     {
-        let top = table.frame_objects(i).iter().max_by(|a, b| {
-            fusion
-                .object_score(a.s_r, a.s_p)
-                .total_cmp(&fusion.object_score(b.s_r, b.s_p))
-        });
+        let top = table
+            .frame_objects(i)
+            .iter()
+            .max_by(|a, b| fusion.object_score(a).total_cmp(&fusion.object_score(b)));
         let Some(top) = top else { continue };
         out.frames += 1;
         let scored = top.box_record(table.frames[i].id);

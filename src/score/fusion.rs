@@ -25,10 +25,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::box_crop;
 use crate::eval::{RobustStats, median_filter};
-use crate::model::TrainingStats;
+use crate::model::{ScoreStats, TrainingStats, band_of};
 
 use super::ScoreError;
-use super::cache::{ObjectMaps, PixelReference, ScoreTable};
+use super::cache::{ObjectMaps, ObjectScore, PixelReference, ScoreTable};
 
 /// The four fusion weights.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -80,40 +80,79 @@ impl Default for FusionWeights {
     }
 }
 
-/// The object score as an affine function of (S_r, S_p): a_r·S_r + a_p·S_p + c.
+/// One affine map (S_r, S_p) ↦ a_r·S_r + a_p·S_p + c.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FrameFusion {
+struct Affine {
     a_r: f64,
     a_p: f64,
     c: f64,
 }
 
-impl FrameFusion {
-    /// The fusion of `weights` under the model's training statistics.
-    pub fn new(stats: &TrainingStats, weights: &FusionWeights) -> Self {
-        let slope =
-            |w: f64, s: &crate::model::ScoreStats| if s.std > 0.0 { w / s.std } else { 0.0 };
+impl Affine {
+    fn new(flow: &ScoreStats, frame: &ScoreStats, weights: &FusionWeights) -> Self {
+        let slope = |w: f64, s: &ScoreStats| if s.std > 0.0 { w / s.std } else { 0.0 };
         Self {
-            a_r: slope(weights.w_r, &stats.flow_score),
-            a_p: slope(weights.w_p, &stats.frame_score),
-            c: weights.w_r * stats.flow_score.z(0.0) + weights.w_p * stats.frame_score.z(0.0),
+            a_r: slope(weights.w_r, flow),
+            a_p: slope(weights.w_p, frame),
+            c: weights.w_r * flow.z(0.0) + weights.w_p * frame.z(0.0),
+        }
+    }
+}
+
+/// The object score `w_r·z(S_r) + w_p·z(S_p)`: an affine function of (S_r, S_p), z-scored
+/// with the training moments of the object's band of the image when the model has them
+/// ([`TrainingStats::bands`]), else with the global ones.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameFusion {
+    global: Affine,
+    /// One map per band, left to right (empty without bands).
+    bands: Vec<Affine>,
+    frame_width: f32,
+}
+
+impl FrameFusion {
+    /// The fusion of `weights` under the model's training statistics, for frames
+    /// `frame_width` pixels wide.
+    pub fn new(stats: &TrainingStats, weights: &FusionWeights, frame_width: u32) -> Self {
+        let n = stats.bands.len();
+        let bands = (0..n)
+            .map(|b| {
+                let (flow, frame) = stats.moments_at((b as f32 + 0.5) / n as f32);
+                Affine::new(flow, frame, weights)
+            })
+            .collect();
+        Self {
+            global: Affine::new(&stats.flow_score, &stats.frame_score, weights),
+            bands,
+            frame_width: frame_width.max(1) as f32,
         }
     }
 
-    /// The score of an object with errors `s_r`, `s_p`.
-    pub fn object_score(&self, s_r: f32, s_p: f32) -> f64 {
-        self.a_r * f64::from(s_r) + self.a_p * f64::from(s_p) + self.c
+    /// The fusion of `weights` for the objects of `table`.
+    pub fn of_table(table: &ScoreTable, weights: &FusionWeights) -> Self {
+        Self::new(&table.meta.training, weights, table.meta.frame_width)
     }
 
-    /// The score of a frame without objects (a zero-error object).
+    /// The score of `object`.
+    pub fn object_score(&self, object: &ObjectScore) -> f64 {
+        let map = if self.bands.is_empty() {
+            &self.global
+        } else {
+            let centre = 0.5 * (object.bbox[0] + object.bbox[2]) / self.frame_width;
+            &self.bands[band_of(centre, self.bands.len())]
+        };
+        map.a_r * f64::from(object.s_r) + map.a_p * f64::from(object.s_p) + map.c
+    }
+
+    /// The score of a frame without objects: a zero-error object under the global moments.
     pub fn empty_frame_score(&self) -> f64 {
-        self.c
+        self.global.c
     }
 }
 
 /// Raw frame scores of a table (one per frame, unfiltered), written into `out`.
 pub fn frame_scores_into(table: &ScoreTable, weights: &FusionWeights, out: &mut Vec<f64>) {
-    let fusion = FrameFusion::new(&table.meta.training, weights);
+    let fusion = FrameFusion::of_table(table, weights);
     out.clear();
     out.reserve(table.frames.len());
     for f in &table.frames {
@@ -124,7 +163,7 @@ pub fn frame_scores_into(table: &ScoreTable, weights: &FusionWeights, out: &mut 
             .unwrap_or(&[]);
         let score = objects
             .iter()
-            .map(|o| fusion.object_score(o.s_r, o.s_p))
+            .map(|o| fusion.object_score(o))
             .reduce(f64::max)
             .unwrap_or_else(|| fusion.empty_frame_score());
         out.push(score);

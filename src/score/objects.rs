@@ -54,7 +54,7 @@ pub fn object_rows(
     table: &ScoreTable,
     weights: &FusionWeights,
 ) -> Result<Vec<ObjectRow>, ScoreError> {
-    let fusion = FrameFusion::new(&table.meta.training, weights);
+    let fusion = FrameFusion::of_table(table, weights);
     let labels = scenario.frame_labels();
     let mut rows = Vec::with_capacity(table.objects.len());
     for (i, entry) in table.frames.iter().enumerate() {
@@ -63,10 +63,7 @@ pub fn object_rows(
             continue;
         }
         let truth = scenario.boxes(i)?;
-        let scores: Vec<f64> = objects
-            .iter()
-            .map(|o| fusion.object_score(o.s_r, o.s_p))
-            .collect();
+        let scores: Vec<f64> = objects.iter().map(|o| fusion.object_score(o)).collect();
         let top = (0..scores.len()).max_by(|&a, &b| scores[a].total_cmp(&scores[b]));
         for (k, (object, score)) in objects.iter().zip(scores).enumerate() {
             let scored = object.box_record(entry.id);

@@ -85,7 +85,7 @@ impl CubeScorer for Detector {
         self.config().clip_hist
     }
     fn training_stats(&self) -> Option<TrainingStats> {
-        Detector::training_stats(self).copied()
+        Detector::training_stats(self).cloned()
     }
     fn box_filter(&self) -> BoxFilter {
         self.config().box_filter

@@ -61,7 +61,7 @@ impl ScoreSeries {
         let skip = (table.meta.clip_hist as usize).min(n);
         let mut filtered = vec![f64::NAN; skip];
         filtered.extend(median_filter(&fused[skip..], median_kernel));
-        let fusion = FrameFusion::new(&table.meta.training, weights);
+        let fusion = FrameFusion::of_table(table, weights);
         let stats = &table.meta.training;
         let mut z_r = vec![f64::NAN; n];
         let mut z_p = vec![f64::NAN; n];
@@ -72,7 +72,7 @@ impl ScoreSeries {
                 .frame_objects(i)
                 .iter()
                 .enumerate()
-                .map(|(k, o)| (k, fusion.object_score(o.s_r, o.s_p)))
+                .map(|(k, o)| (k, fusion.object_score(o)))
                 .fold(None, |best: Option<(usize, f64)>, cur| match best {
                     Some(b) if b.1 >= cur.1 => Some(b),
                     _ => Some(cur),

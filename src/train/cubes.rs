@@ -1,9 +1,12 @@
 //! `CubeSet`: an in-memory set of spatio-temporal cubes (frames as bytes, flows as f32,
-//! a scenario group per cube) with its file format, batching and the validation split.
+//! a scenario group and the box centre's column per cube) with its file format, batching
+//! and the validation split.
 //!
 //! On disk a cube set is a safetensors file (`frames` U8 [N, 3(t+1), P, P], `flows` F32
-//! [N, 2t, P, P], `groups` U32 [N]) with `vadscope.format = vadscope-cubes/1`. Cubes are
-//! always stored in vadscope's conventions: RGB frames, flows in native pixels.
+//! [N, 2t, P, P], `groups` U32 [N], `centres` F32 [N]) with `vadscope.format =
+//! vadscope-cubes/2`; `vadscope-cubes/1` files (without `centres`) still load, their centres
+//! unknown. Cubes are always stored in vadscope's conventions: RGB frames, flows in native
+//! pixels.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -15,7 +18,9 @@ use crate::model::rng::NoiseRng;
 
 use super::error::TrainError;
 
-const FORMAT: &str = "vadscope-cubes/1";
+const FORMAT: &str = "vadscope-cubes/2";
+/// The first format, without box centres.
+const FORMAT_WITHOUT_CENTRES: &str = "vadscope-cubes/1";
 
 /// A set of cubes of one patch size and history length.
 #[derive(Debug, Clone, PartialEq)]
@@ -25,6 +30,8 @@ pub struct CubeSet {
     frames: Vec<u8>,
     flows: Vec<f32>,
     groups: Vec<u32>,
+    /// Box centre per cube as a fraction of the frame width (NaN where unknown).
+    centres: Vec<f32>,
 }
 
 impl CubeSet {
@@ -36,6 +43,7 @@ impl CubeSet {
             frames: Vec::new(),
             flows: Vec::new(),
             groups: Vec::new(),
+            centres: Vec::new(),
         }
     }
 
@@ -70,8 +78,15 @@ impl CubeSet {
     }
 
     /// Adds a cube: `frames` RGB bytes [3(t+1), P, P] (oldest first), `flows` [2t, P, P] in
-    /// native pixels, `group` the scenario it came from (keeps the split leak-free).
-    pub fn push(&mut self, frames: &[u8], flows: &[f32], group: u32) -> Result<(), TrainError> {
+    /// native pixels, `group` the scenario it came from (keeps the split leak-free),
+    /// `centre` its box centre as a fraction of the frame width.
+    pub fn push(
+        &mut self,
+        frames: &[u8],
+        flows: &[f32],
+        group: u32,
+        centre: f32,
+    ) -> Result<(), TrainError> {
         if frames.len() != self.frame_len() || flows.len() != self.flow_len() {
             return Err(TrainError::Data(format!(
                 "cube of {} frame bytes and {} flow values; expected {} and {}",
@@ -89,6 +104,7 @@ impl CubeSet {
         self.frames.extend_from_slice(frames);
         self.flows.extend_from_slice(flows);
         self.groups.push(group);
+        self.centres.push(centre);
         Ok(())
     }
 
@@ -103,6 +119,7 @@ impl CubeSet {
         self.frames.extend_from_slice(&other.frames);
         self.flows.extend_from_slice(&other.flows);
         self.groups.extend_from_slice(&other.groups);
+        self.centres.extend_from_slice(&other.centres);
         Ok(())
     }
 
@@ -119,6 +136,12 @@ impl CubeSet {
     /// Scenario group of cube `i`.
     pub fn group_of(&self, i: usize) -> u32 {
         self.groups[i]
+    }
+
+    /// Box centre of cube `i` as a fraction of the frame width; `None` for cubes read from
+    /// a file that predates centres.
+    pub fn centre_of(&self, i: usize) -> Option<f32> {
+        Some(self.centres[i]).filter(|c| c.is_finite())
     }
 
     /// Frames (as f32 in [0, 1]) and flows of the cubes `indices`, concatenated.
@@ -162,6 +185,8 @@ impl CubeSet {
         let frame_bytes = self.frames.len();
         let flow_bytes = self.flows.len() * 4;
         let group_bytes = self.groups.len() * 4;
+        let centre_bytes = self.centres.len() * 4;
+        let centres_at = frame_bytes + flow_bytes + group_bytes;
         let header = json!({
             "__metadata__": {
                 "vadscope.format": FORMAT,
@@ -172,20 +197,22 @@ impl CubeSet {
             "flows": {"dtype": "F32", "shape": [n, 2 * t, p, p],
                       "data_offsets": [frame_bytes, frame_bytes + flow_bytes]},
             "groups": {"dtype": "U32", "shape": [n],
-                       "data_offsets": [frame_bytes + flow_bytes, frame_bytes + flow_bytes + group_bytes]},
+                       "data_offsets": [frame_bytes + flow_bytes, centres_at]},
+            "centres": {"dtype": "F32", "shape": [n],
+                        "data_offsets": [centres_at, centres_at + centre_bytes]},
         });
         let mut header = serde_json::to_vec(&header).map_err(|e| TrainError::io(path, e))?;
         // safetensors pads the header with spaces to an 8-byte boundary.
         while header.len() % 8 != 0 {
             header.push(b' ');
         }
-        let mut bytes =
-            Vec::with_capacity(8 + header.len() + frame_bytes + flow_bytes + group_bytes);
+        let mut bytes = Vec::with_capacity(8 + header.len() + centres_at + centre_bytes);
         bytes.extend_from_slice(&(header.len() as u64).to_le_bytes());
         bytes.extend_from_slice(&header);
         bytes.extend_from_slice(&self.frames);
         bytes.extend(self.flows.iter().flat_map(|v| v.to_le_bytes()));
         bytes.extend(self.groups.iter().flat_map(|v| v.to_le_bytes()));
+        bytes.extend(self.centres.iter().flat_map(|v| v.to_le_bytes()));
         Ok(write_atomically(path, &bytes)?)
     }
 
@@ -206,9 +233,11 @@ impl CubeSet {
         let meta = header
             .get("__metadata__")
             .ok_or_else(|| bad("no metadata: not a cube set".into()))?;
-        if meta.get("vadscope.format").and_then(|v| v.as_str()) != Some(FORMAT) {
-            return Err(bad(format!("not a cube set (format is not {FORMAT})")));
-        }
+        let with_centres = match meta.get("vadscope.format").and_then(|v| v.as_str()) {
+            Some(FORMAT) => true,
+            Some(FORMAT_WITHOUT_CENTRES) => false,
+            _ => return Err(bad(format!("not a cube set (format is not {FORMAT})"))),
+        };
         let number = |key: &str| {
             meta.get(key)
                 .and_then(|v| v.as_str())
@@ -275,6 +304,18 @@ impl CubeSet {
             .chunks_exact(4)
             .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
             .collect();
+        set.centres = if with_centres {
+            let (centres, n_centres) = section("centres", "F32", 4)?;
+            if n_centres != n_groups {
+                return Err(bad("centres and groups disagree on the cube count".into()));
+            }
+            centres
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect()
+        } else {
+            vec![f32::NAN; n_groups]
+        };
         if set.flows.iter().any(|v| !v.is_finite()) {
             return Err(bad("flows hold non-finite values".into()));
         }
@@ -293,7 +334,7 @@ mod tests {
             let flows: Vec<f32> = (0..s.flow_len())
                 .map(|v| v as f32 * 0.5 - i as f32)
                 .collect();
-            s.push(&frames, &flows, g).expect("push");
+            s.push(&frames, &flows, g, 0.1 * i as f32).expect("push");
         }
         s
     }
@@ -304,7 +345,9 @@ mod tests {
         let path = dir.path().join("cubes.safetensors");
         let s = set(&[0, 0, 1, 2]);
         s.save(&path).expect("save");
-        assert_eq!(CubeSet::load(&path).expect("load"), s);
+        let back = CubeSet::load(&path).expect("load");
+        assert_eq!(back, s);
+        assert_eq!(back.centre_of(2), Some(0.2));
 
         std::fs::write(&path, b"nonsense").expect("write");
         let err = CubeSet::load(&path).expect_err("garbage");
@@ -329,8 +372,8 @@ mod tests {
     #[test]
     fn wrong_sizes_are_rejected() {
         let mut s = CubeSet::new(4, 1);
-        assert!(s.push(&[0; 3], &[0.0; 32], 0).is_err());
-        assert!(s.push(&[0; 96], &[f32::NAN; 32], 0).is_err());
+        assert!(s.push(&[0; 3], &[0.0; 32], 0, 0.5).is_err());
+        assert!(s.push(&[0; 96], &[f32::NAN; 32], 0, 0.5).is_err());
         assert!(s.is_empty());
     }
 }

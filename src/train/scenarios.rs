@@ -95,8 +95,10 @@ fn add_scenario(
             .collect();
         let boxes = extraction.box_filter.apply(boxes, scenario.resolution());
         let cubes = scenario_cubes(scenario, index, &boxes, extraction.geometry)?;
+        let width = scenario.resolution().0.max(1) as f32;
         for cube in cubes {
-            set.push(&cube.frames, &cube.flows, group)?;
+            let centre = 0.5 * (cube.bbox.x1 + cube.bbox.x2) / width;
+            set.push(&cube.frames, &cube.flows, group, centre)?;
         }
     }
     Ok(())

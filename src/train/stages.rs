@@ -257,7 +257,7 @@ fn run_training(
 
     let model = model.valid();
     let stats = ctx.training_statistics(&model)?;
-    on_event(&TrainEvent::StatsDone(stats));
+    on_event(&TrainEvent::StatsDone(stats.clone()));
     let checkpoint = out_dir.join(FINAL);
     let note = format!(
         "trained by vadscope: seed {}, {} training / {} validation cubes",
@@ -267,7 +267,7 @@ fn run_training(
     );
     let meta = CheckpointMeta {
         config: model_config.clone(),
-        stats: Some(stats),
+        stats: Some(stats.clone()),
         note: Some(note),
     };
     save_checkpoint(&checkpoint, &model, &meta)?;
@@ -328,10 +328,15 @@ fn prepare_for_stage(mut model: Hf2Vad, stage: usize) -> Hf2Vad {
     model
 }
 
-/// The model of the vadscope checkpoint `path`, which must have been made with `config`.
+/// The model of the vadscope checkpoint `path`, which must have been made with `config`
+/// (up to the score bands, which only shape the statistics computed after training).
 fn initial_model(path: &Path, config: &ModelConfig, device: &Device) -> Result<Hf2Vad, TrainError> {
     let checkpoint = load_checkpoint(path, device)?;
-    if checkpoint.meta.config != *config {
+    let same_network = ModelConfig {
+        score_bands: config.score_bands,
+        ..checkpoint.meta.config.clone()
+    };
+    if same_network != *config {
         return Err(TrainError::file(
             path,
             format!(
@@ -585,11 +590,28 @@ impl Context<'_> {
         };
         let detector = Detector::new(model.clone(), meta, &Device::flex())?
             .with_max_batch(self.train_config.eval_batch);
-        let mut acc = StatsAccumulator::new(self.train_config.pixel_sample, self.train_config.seed);
+        let bands = self.model_config.score_bands;
+        let mut acc = StatsAccumulator::new(self.train_config.pixel_sample, self.train_config.seed)
+            .with_bands(bands);
         for chunk in self.train_idx.chunks(self.train_config.eval_batch) {
             let (frames, flows) = self.data.gather(chunk);
-            for cube in detector.infer(&frames, &flows)? {
-                acc.push(cube.s_r, cube.s_p, &cube.flow_error, &cube.frame_error);
+            for (&i, cube) in chunk.iter().zip(detector.infer(&frames, &flows)?) {
+                let centre = match self.data.centre_of(i) {
+                    Some(centre) => centre,
+                    None if bands > 1 => {
+                        return Err(TrainError::Data(format!(
+                            "{bands} score bands need the box centres of the cubes, which a cube file of an older vadscope lacks; delete cubes.safetensors in the output folder to extract them again"
+                        )));
+                    }
+                    None => 0.5,
+                };
+                acc.push_at(
+                    centre,
+                    cube.s_r,
+                    cube.s_p,
+                    &cube.flow_error,
+                    &cube.frame_error,
+                );
             }
         }
         Ok(acc.finish())

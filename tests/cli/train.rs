@@ -142,6 +142,33 @@ fn training_lowers_the_loss_and_writes_a_checkpoint_with_statistics() {
     assert!(stats.flow_score.mean > 0.0 && stats.frame_score.std > 0.0);
     assert!(stats.frame_pixel.iqr >= 0.0 && stats.flow_pixel.total > 0);
 
+    // Score bands re-derived for the trained model: same weights, statistics per band.
+    let banded = dir.path().join("banded");
+    let init = path(&trained_model).to_string();
+    let rederived = run(&tiny(
+        &data,
+        &banded,
+        None,
+        &["--init", &init, "--epochs", "0", "--score-bands", "3"],
+    ));
+    assert!(rederived.status.success(), "{}", text(&rederived.stderr));
+    let again_stdout = text(&rederived.stdout);
+    assert!(again_stdout.contains("band 3/3"), "{again_stdout}");
+    let banded = load_checkpoint(&banded.join("model.safetensors"), &Device::flex())
+        .expect("banded checkpoint loads");
+    assert_eq!(banded.meta.config.score_bands, 3);
+    let banded_stats = banded.meta.stats.expect("statistics");
+    assert_eq!(banded_stats.bands.len(), 3);
+    assert_eq!(
+        banded_stats.bands.iter().map(|b| b.cubes).sum::<u64>(),
+        banded_stats.cubes,
+        "every training cube lies in one band"
+    );
+    assert_eq!(
+        banded_stats.flow_score, stats.flow_score,
+        "same model, same cubes"
+    );
+
     let again = run(&tiny(&data, &out, Some(&model), &["--epochs", "3"]));
     assert!(!again.status.success());
     assert!(

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use crate::eval::RobustStats;
-use crate::model::{PixelStats, ScoreStats, TrainingStats};
+use crate::model::{BandStats, PixelStats, ScoreStats, TrainingStats};
 use crate::sequence::FrameId;
 
 use super::super::ScoreError;
@@ -15,14 +15,17 @@ use super::table::{
 
 /// File magic.
 pub const MAGIC: &[u8; 8] = b"VADSCORE";
-/// Format version written and read by this vadscope.
-pub const VERSION: u32 = 1;
+/// Format version written and read by this vadscope (2: training statistics carry the
+/// per-band score moments).
+pub const VERSION: u32 = 2;
 
 /// Bytes of the preamble.
 pub(super) const PREAMBLE_LEN: u64 = 64;
 pub(super) const FRAME_RECORD_LEN: usize = 16;
 pub(super) const OBJECT_RECORD_LEN: usize = 48;
 pub(super) const BATCH_RECORD_LEN: usize = 48;
+/// Bytes of one score band: cubes (u64) and two (mean, std) pairs of f64.
+const BAND_RECORD_LEN: usize = 40;
 
 /// f32 → IEEE binary16, rounding to nearest even; overflow becomes infinity.
 fn f32_to_f16(value: f32) -> u16 {
@@ -255,6 +258,12 @@ pub(super) fn encode_tables(table: &ScoreTable, checksums: &[u32]) -> Vec<u8> {
     t.score_stats(&m.training.frame_score);
     t.pixel_stats(&m.training.flow_pixel);
     t.pixel_stats(&m.training.frame_pixel);
+    t.u32(m.training.bands.len() as u32);
+    for band in &m.training.bands {
+        t.u64(band.cubes);
+        t.score_stats(&band.flow_score);
+        t.score_stats(&band.frame_score);
+    }
     t.robust(&m.scenario_pixels.flow);
     t.robust(&m.scenario_pixels.frame);
     t.u32(m.batch_size);
@@ -314,12 +323,27 @@ pub(super) fn decode_tables(
     }
     let clip_hist = r.u32("clip_hist")?;
     let frame_ids_hash = r.u64("frame id hash")?;
+    let what = "training statistics";
+    let (cubes, flow_score, frame_score) =
+        (r.u64(what)?, r.score_stats(what)?, r.score_stats(what)?);
+    let (flow_pixel, frame_pixel) = (r.pixel_stats(what)?, r.pixel_stats(what)?);
+    let band_count = r.count(BAND_RECORD_LEN, "score bands")?;
+    let bands = (0..band_count)
+        .map(|_| {
+            Ok(BandStats {
+                cubes: r.u64("score bands")?,
+                flow_score: r.score_stats("score bands")?,
+                frame_score: r.score_stats("score bands")?,
+            })
+        })
+        .collect::<Result<Vec<_>, ScoreError>>()?;
     let training = TrainingStats {
-        cubes: r.u64("training statistics")?,
-        flow_score: r.score_stats("training statistics")?,
-        frame_score: r.score_stats("training statistics")?,
-        flow_pixel: r.pixel_stats("training statistics")?,
-        frame_pixel: r.pixel_stats("training statistics")?,
+        cubes,
+        flow_score,
+        frame_score,
+        flow_pixel,
+        frame_pixel,
+        bands,
     };
     let scenario_pixels = PixelReference {
         flow: r.robust("scenario pixel statistics")?,

@@ -39,6 +39,7 @@ fn stats() -> TrainingStats {
             median: 0.01,
             ..pixel
         },
+        bands: Vec::new(),
     }
 }
 

@@ -3,6 +3,7 @@
 //! per-batch mode and grids of other sizes.
 
 use vadscope::eval::median_filter;
+use vadscope::model::{BandStats, ScoreStats};
 use vadscope::score::{
     FrameFusion, FusionWeights, Heatmap, HeatmapScratch, ObjectMaps, PixelReferenceMode,
     compose_heatmap, frame_scores, metric_frames,
@@ -70,9 +71,39 @@ fn frames_without_objects_score_a_zero_error_object() {
     for s in scores {
         assert!(close(s, zero_error), "{s} vs {zero_error}");
     }
-    let fusion = FrameFusion::new(&t.meta.training, &w);
+    let fusion = FrameFusion::of_table(&t, &w);
     assert!(close(fusion.empty_frame_score(), zero_error));
-    assert!(close(fusion.object_score(12.0, 1.0), 3.0));
+    let mut o = t.objects[0];
+    (o.s_r, o.s_p) = (12.0, 1.0);
+    assert!(close(fusion.object_score(&o), 3.0));
+}
+
+#[test]
+fn score_bands_z_score_each_object_against_the_training_objects_of_its_band() {
+    // Frames 64 px wide in 2 bands. Left band: μ_r 100, σ_r 50 (objects there err a lot in
+    // normal driving); right band: too few cubes, so the global μ_r 10, σ_r 2 applies.
+    let left = object([0.0, 0.0, 16.0, 8.0], 150.0, 1.0);
+    let right = object([40.0, 0.0, 56.0, 8.0], 14.0, 1.0);
+    let mut t = table(&[vec![left, right]], SIZE, 4, 128);
+    let band = |cubes, mean, std| BandStats {
+        cubes,
+        flow_score: ScoreStats { mean, std },
+        frame_score: ScoreStats {
+            mean: 1.0,
+            std: 0.5,
+        },
+    };
+    t.meta.training.bands = vec![band(500, 100.0, 50.0), band(3, 999.0, 1.0)];
+    let w = weights(1.0, 0.0, 0.0, 0.0);
+    let fusion = FrameFusion::of_table(&t, &w);
+    let (l, r) = (&t.objects[0], &t.objects[1]);
+    assert!(close(fusion.object_score(l), 1.0), "(150 − 100) / 50");
+    assert!(close(fusion.object_score(r), 2.0), "(14 − 10) / 2, global");
+    // Without bands the left object's large error sets the frame's score; with them the
+    // right one does.
+    assert!(close(frame_scores(&t, &w)[0], 2.0));
+    t.meta.training.bands.clear();
+    assert!(close(frame_scores(&t, &w)[0], 70.0), "(150 − 10) / 2");
 }
 
 #[test]

@@ -44,7 +44,7 @@ impl CubeScorer for ZeroModel {
         T
     }
     fn training_stats(&self) -> Option<TrainingStats> {
-        self.stats
+        self.stats.clone()
     }
     fn score(&self, frames: &[f32], flows: &[f32]) -> Result<Vec<CubeResult>, ModelError> {
         let frame_len = 3 * (T + 1) * AREA;

@@ -42,7 +42,7 @@ fn synthetic_cubes() -> CubeSet {
                 flows.extend(noise.into_iter().map(|n| comp as f32 + n));
             }
         }
-        set.push(&frames, &flows, cube / 6).expect("cube");
+        set.push(&frames, &flows, cube / 6, 0.5).expect("cube");
     }
     set
 }
@@ -110,7 +110,7 @@ fn three_stages_reduce_their_losses_and_the_checkpoint_reproduces_the_model() {
     // statistics exactly (same outputs on the same training cubes).
     let meta = read_checkpoint_meta(&report.checkpoint).expect("meta");
     assert_eq!(meta.config, tiny_config(ModelConfig::paper()));
-    assert_eq!(meta.stats, Some(report.stats));
+    assert_eq!(meta.stats.as_ref(), Some(&report.stats));
     // Same batch size as the statistics pass, so the arithmetic is the same.
     let detector = Detector::from_checkpoint(&report.checkpoint)
         .expect("load")
