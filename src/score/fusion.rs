@@ -107,7 +107,7 @@ pub struct FrameFusion {
     global: Affine,
     /// One map per band, left to right (empty without bands).
     bands: Vec<Affine>,
-    frame_width: f32,
+    frame_width: u32,
 }
 
 impl FrameFusion {
@@ -124,7 +124,7 @@ impl FrameFusion {
         Self {
             global: Affine::new(&stats.flow_score, &stats.frame_score, weights),
             bands,
-            frame_width: frame_width.max(1) as f32,
+            frame_width,
         }
     }
 
@@ -138,7 +138,7 @@ impl FrameFusion {
         let map = if self.bands.is_empty() {
             &self.global
         } else {
-            let centre = 0.5 * (object.bbox[0] + object.bbox[2]) / self.frame_width;
+            let centre = object.centre_fraction(self.frame_width);
             &self.bands[band_of(centre, self.bands.len())]
         };
         map.a_r * f64::from(object.s_r) + map.a_p * f64::from(object.s_p) + map.c

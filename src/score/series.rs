@@ -79,8 +79,7 @@ impl ScoreSeries {
                 });
             if let Some((k, _)) = best {
                 let o = &table.objects[first + k];
-                z_r[i] = stats.flow_score.z(f64::from(o.s_r));
-                z_p[i] = stats.frame_score.z(f64::from(o.s_p));
+                (z_r[i], z_p[i]) = o.z_scores(stats, table.meta.frame_width);
                 top_object[i] = Some(first + k);
             }
         }

@@ -5,6 +5,7 @@
 #[path = "../support/mod.rs"]
 mod support;
 
+mod bundled_model;
 mod flow;
 mod generate;
 mod labels;

@@ -80,8 +80,7 @@ impl AppState {
             .iter()
             .enumerate()
             .map(|(index, o)| {
-                let z_r = stats.flow_score.z(f64::from(o.s_r));
-                let z_p = stats.frame_score.z(f64::from(o.s_p));
+                let (z_r, z_p) = o.z_scores(stats, table.meta.frame_width);
                 ObjectInfo {
                     index,
                     track_id: o.track_id,

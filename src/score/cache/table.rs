@@ -76,6 +76,19 @@ pub struct ObjectScore {
 }
 
 impl ObjectScore {
+    /// The box centre's column as a fraction of a frame `frame_width` pixels wide (what
+    /// picks the object's score band, [`TrainingStats::moments_at`]).
+    pub fn centre_fraction(&self, frame_width: u32) -> f32 {
+        0.5 * (self.bbox[0] + self.bbox[2]) / frame_width.max(1) as f32
+    }
+
+    /// z(S_r) and z(S_p) of the object under `stats`: against the training objects of its
+    /// band of the image when the model has bands, else the global moments.
+    pub fn z_scores(&self, stats: &TrainingStats, frame_width: u32) -> (f64, f64) {
+        let (flow, frame) = stats.moments_at(self.centre_fraction(frame_width));
+        (flow.z(f64::from(self.s_r)), frame.z(f64::from(self.s_p)))
+    }
+
     /// The object's box as a [`BoxRecord`] of frame `frame` (not flagged anomalous).
     pub fn box_record(&self, frame: FrameId) -> BoxRecord {
         BoxRecord {

@@ -99,6 +99,9 @@ fn score_bands_z_score_each_object_against_the_training_objects_of_its_band() {
     let (l, r) = (&t.objects[0], &t.objects[1]);
     assert!(close(fusion.object_score(l), 1.0), "(150 − 100) / 50");
     assert!(close(fusion.object_score(r), 2.0), "(14 − 10) / 2, global");
+    // The viewer's and the timeline's z-scores read the same moments.
+    assert!(close(l.z_scores(&t.meta.training, SIZE.0).0, 1.0));
+    assert!(close(r.z_scores(&t.meta.training, SIZE.0).0, 2.0));
     // Without bands the left object's large error sets the frame's score; with them the
     // right one does.
     assert!(close(frame_scores(&t, &w)[0], 2.0));
