@@ -23,7 +23,8 @@ common=(--data "$work/train" --seed 0 --frame-stride 3)
 # 2. Stage 1 for 20 more epochs from there, one thread (it ran beside another run).
 "$vadscope" train "${common[@]}" --out "$work/run2" --init "$work/run1/model.safetensors" \
   --stage memae --memae-epochs 20 --batch 32 --memae-lr 1e-3 --threads 1
-# 3. The training statistics again, per 5 vertical bands of the image.
+# 3. Stage 1 for 25 more epochs, one thread, then the training statistics per 5 vertical
+#    bands of the image.
 "$vadscope" train "${common[@]}" --out "$work/run3" --init "$work/run2/model.safetensors" \
-  --epochs 0 --score-bands 5
+  --stage memae --memae-epochs 25 --batch 32 --memae-lr 1e-3 --score-bands 5 --threads 1
 cp "$work/run3/model.safetensors" "$here/hf2vad_ad_compact.safetensors"

@@ -12,9 +12,9 @@ use crate::support::cli::{text, vadscope};
 /// Frame AUROC floor (measured when bundled: see `FLOOR_NOTE`).
 const AUROC_FLOOR: f64 = 0.65;
 /// Floor on the fraction of anomaly frames whose top-scoring object is the braking lead.
-const LEAD_TOP_FLOOR: f64 = 0.45;
+const LEAD_TOP_FLOOR: f64 = 0.55;
 /// Where the floors come from.
-const FLOOR_NOTE: &str = "measured at bundling: frame AUROC 0.751, the lead on top in 18 of 31 anomaly frames (0.58); assets/model/MODEL.md";
+const FLOOR_NOTE: &str = "measured at bundling: frame AUROC 0.746, the lead on top in 22 of 31 anomaly frames (0.71); assets/model/MODEL.md";
 
 #[test]
 fn the_bundled_model_detects_a_generated_sudden_braking() {
