@@ -222,29 +222,56 @@ struct Scored<'a> {
     cache: ScoreCache,
 }
 
-/// Per scored scenario, one pixel accumulator per weights of `weights`.
+/// Pixel accumulators per weights point of `weights` (outer) and scored scenario (inner).
+/// Point 0 (the table's weights) keeps one accumulator per scenario, which the table groups
+/// by condition. The other points (the weight study, whose rows span every scenario of a box
+/// source) are merged as scenarios finish into the first scenario of each box source
+/// (`sources[i]` names scenario `i`'s), the others left empty: merging them again gives the
+/// same rows, and memory holds one histogram per source and point instead of one per
+/// scenario and point (at 768×512 the latter outgrew 23 GiB on the test preset).
 fn pixel_counts(
     scored: &[Scored],
+    sources: &[&str],
     weights: &[FusionWeights],
     mode: PixelReferenceMode,
 ) -> anyhow::Result<Vec<Vec<PixelRoc>>> {
-    scored
-        .par_iter()
-        .map(|s| {
-            let mut rocs = vec![PixelRoc::new(); weights.len()];
-            let skip = s.cache.table().meta.clip_hist as usize;
-            let frames =
-                add_scenario_pixels_each(&mut rocs, s.scenario, &s.cache, weights, mode, skip)
-                    .with_context(|| format!("pixel metrics of {}", s.scenario.root().display()))?;
-            if frames == 0 {
-                eprintln!(
-                    "{}: no anomaly masks (SEMANTIC_IMG), no pixel metrics",
-                    s.scenario.name()
-                );
+    let mut per_point: Vec<Vec<PixelRoc>> =
+        vec![vec![PixelRoc::new(); scored.len()]; weights.len()];
+    let first_of_source = |i: usize| sources.iter().position(|s| *s == sources[i]).unwrap_or(i);
+    // Scenarios in batches of the worker count: at most one batch's histograms in flight.
+    let batch = rayon::current_num_threads().max(1);
+    for (b, chunk) in scored.chunks(batch).enumerate() {
+        let counted: Vec<Vec<PixelRoc>> = chunk
+            .par_iter()
+            .map(|s| {
+                let mut rocs = vec![PixelRoc::new(); weights.len()];
+                let skip = s.cache.table().meta.clip_hist as usize;
+                let frames =
+                    add_scenario_pixels_each(&mut rocs, s.scenario, &s.cache, weights, mode, skip)
+                        .with_context(|| {
+                            format!("pixel metrics of {}", s.scenario.root().display())
+                        })?;
+                if frames == 0 {
+                    eprintln!(
+                        "{}: no anomaly masks (SEMANTIC_IMG), no pixel metrics",
+                        s.scenario.name()
+                    );
+                }
+                Ok(rocs)
+            })
+            .collect::<anyhow::Result<_>>()?;
+        for (j, rocs) in counted.into_iter().enumerate() {
+            let i = b * batch + j;
+            for (k, roc) in rocs.into_iter().enumerate() {
+                if k == 0 {
+                    per_point[0][i] = roc;
+                } else {
+                    per_point[k][first_of_source(i)].merge(&roc);
+                }
             }
-            Ok(rocs)
-        })
-        .collect()
+        }
+    }
+    Ok(per_point)
 }
 
 /// Runs `vadscope eval`.
@@ -295,12 +322,10 @@ pub fn run(args: EvalArgs) -> anyhow::Result<ExitCode> {
     let grid = if args.sweep { sweep_grid() } else { Vec::new() };
     let (table_pixels, grid_pixels) = if args.pixel {
         let points: Vec<FusionWeights> = std::iter::once(weights).chain(grid.clone()).collect();
-        let per_item = pixel_counts(&scored, &points, args.pixel_reference.mode())?;
-        let per_point: Vec<Vec<PixelRoc>> = (0..points.len())
-            .map(|k| per_item.iter().map(|rocs| rocs[k].clone()).collect())
-            .collect();
-        let (first, rest) = per_point.split_first().expect("one point at least");
-        (Some(first.clone()), Some(rest.to_vec()))
+        let sources: Vec<&str> = items.iter().map(|i| i.box_source.as_str()).collect();
+        let mut per_point = pixel_counts(&scored, &sources, &points, args.pixel_reference.mode())?;
+        let table = per_point.remove(0);
+        (Some(table), Some(per_point))
     } else {
         (None, None)
     };

@@ -432,6 +432,38 @@ fn sweep_gives_one_row_per_grid_point() {
     let tables: Vec<&str> = csv.split("\n\n").collect();
     assert_eq!(tables.len(), 2, "Table 2 and Table 3:\n{csv}");
     assert_eq!(tables[1].trim_end().lines().count(), 1 + 9, "{csv}");
+
+    // Pixel metrics of the study (merged per box source as scenarios finish) agree with the
+    // table's row over all scenarios at the same weights (the paper text's, on the grid).
+    let json = succeed(&[
+        "eval",
+        data.to_str().unwrap(),
+        "--model",
+        model.to_str().unwrap(),
+        "--boxes",
+        "gt,motion",
+        "--by",
+        "none",
+        "--pixel",
+        "--sweep",
+        "--format",
+        "json",
+    ]);
+    let report: Value = serde_json::from_str(&json).expect("JSON");
+    let table = rows(&report, "table2");
+    let sweep = rows(&report, "table3");
+    assert_eq!(sweep.len(), 2 * 9, "{json}");
+    for row in table {
+        let same = sweep
+            .iter()
+            .find(|r| {
+                r["row"]["box_source"] == row["box_source"]
+                    && r["preset"] == "HF²-VAD_AD paper text (10 / 0.1)"
+            })
+            .expect("the paper-text point of this box source");
+        assert!(row["pixel"]["auroc"].is_f64(), "{row}");
+        assert_eq!(same["row"]["pixel"], row["pixel"], "{}", row["box_source"]);
+    }
 }
 
 #[test]
