@@ -208,16 +208,8 @@ impl StatsAccumulator {
 
     /// The statistics of everything pushed so far.
     pub fn finish(self) -> TrainingStats {
-        let n = self.cubes.max(1) as f64;
-        let moments = |scores: &[f64]| {
-            let mean = scores.iter().sum::<f64>() / n;
-            let var = scores.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / n;
-            ScoreStats {
-                mean,
-                std: var.sqrt(),
-            }
-        };
-        let of = |values: &[f64]| {
+        // Population moments; none pushed gives 0 and 0.
+        let moments = |values: &[f64]| {
             ScoreStats::of(values).unwrap_or(ScoreStats {
                 mean: 0.0,
                 std: 0.0,
@@ -237,8 +229,8 @@ impl StatsAccumulator {
                     let flow = pick(&self.flow_scores);
                     BandStats {
                         cubes: flow.len() as u64,
-                        flow_score: of(&flow),
-                        frame_score: of(&pick(&self.frame_scores)),
+                        flow_score: moments(&flow),
+                        frame_score: moments(&pick(&self.frame_scores)),
                     }
                 })
                 .collect()

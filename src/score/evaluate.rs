@@ -162,11 +162,10 @@ pub fn top_object_hits(
         .skip(skip_first)
         .filter(|(_, a)| **a)
     {
-        let top = table
-            .frame_objects(i)
-            .iter()
-            .max_by(|a, b| fusion.object_score(a).total_cmp(&fusion.object_score(b)));
-        let Some(top) = top else { continue };
+        let objects = table.frame_objects(i);
+        let Some(top) = fusion.top_object(objects).map(|k| &objects[k]) else {
+            continue;
+        };
         out.frames += 1;
         let scored = top.box_record(table.frames[i].id);
         out.hits += usize::from(is_anomalous_object(top, &scored, &scenario.boxes(i)?));

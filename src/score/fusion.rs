@@ -144,6 +144,15 @@ impl FrameFusion {
         map.a_r * f64::from(object.s_r) + map.a_p * f64::from(object.s_p) + map.c
     }
 
+    /// The index in `objects` of the object with the highest score (the last of equal ones),
+    /// `None` for no objects: the object that sets a frame's score.
+    pub fn top_object(&self, objects: &[ObjectScore]) -> Option<usize> {
+        (0..objects.len()).max_by(|&a, &b| {
+            self.object_score(&objects[a])
+                .total_cmp(&self.object_score(&objects[b]))
+        })
+    }
+
     /// The score of a frame without objects: a zero-error object under the global moments.
     pub fn empty_frame_score(&self) -> f64 {
         self.global.c

@@ -63,9 +63,8 @@ pub fn object_rows(
             continue;
         }
         let truth = scenario.boxes(i)?;
-        let scores: Vec<f64> = objects.iter().map(|o| fusion.object_score(o)).collect();
-        let top = (0..scores.len()).max_by(|&a, &b| scores[a].total_cmp(&scores[b]));
-        for (k, (object, score)) in objects.iter().zip(scores).enumerate() {
+        let top = fusion.top_object(objects);
+        for (k, object) in objects.iter().enumerate() {
             let scored = object.box_record(entry.id);
             rows.push(ObjectRow {
                 scenario: scenario.name().to_string(),
@@ -74,7 +73,7 @@ pub fn object_rows(
                 frame_id: entry.id.0,
                 anomalous_frame: labels.is_anomalous(i),
                 object: *object,
-                score,
+                score: fusion.object_score(object),
                 top: top == Some(k),
                 anomalous_object: is_anomalous_object(object, &scored, &truth),
             });
