@@ -5,8 +5,9 @@
 //! Threads: burn's CPU backend uses the rayon pool, so run once per thread count:
 //! `RAYON_NUM_THREADS=1 cargo bench --bench model` and `RAYON_NUM_THREADS=2 …`.
 //! `VADSCOPE_BENCH=infer` or `=train` restricts the run to one part; `VADSCOPE_PRESETS=compact`
-//! to one preset. The PyTorch reference figures to compare with are in
-//! `shared/design/pytorch-cpu-anchor.md`.
+//! to one preset. Training steps run through the lowered convolutions and, side by side,
+//! through burn's own (`stage1/burn_conv`); `VADSCOPE_TRAIN_PATHS=lowered` keeps one. The
+//! PyTorch reference figures to compare with are in `shared/design/pytorch-cpu-anchor.md`.
 
 use std::time::Duration;
 
@@ -15,6 +16,7 @@ use burn::optim::{AdamConfig, GradientsParams};
 use burn::tensor::{Device, Tensor, TensorData};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
+use vadscope::model::gemm_conv::training::with_burn_convolutions;
 use vadscope::model::losses::{LossWeights, stage1_loss, stage2_loss, stage3_loss};
 use vadscope::model::{CheckpointMeta, Detector, Hf2Vad, Latents, ModelConfig, NoiseRng};
 
@@ -27,6 +29,18 @@ fn presets() -> Vec<ModelConfig> {
     wanted
         .split(',')
         .filter_map(|name| ModelConfig::preset(name.trim()).ok())
+        .collect()
+}
+
+/// The training paths to measure: the lowered convolutions (`lowered`, what training uses)
+/// and burn's own (`burn_conv`, the reference they replace), side by side;
+/// `VADSCOPE_TRAIN_PATHS=lowered` restricts the run to one.
+fn training_paths() -> Vec<&'static str> {
+    let wanted =
+        std::env::var("VADSCOPE_TRAIN_PATHS").unwrap_or_else(|_| "lowered,burn_conv".into());
+    ["lowered", "burn_conv"]
+        .into_iter()
+        .filter(|path| wanted.split(',').any(|w| w.trim() == *path))
         .collect()
 }
 
@@ -82,19 +96,20 @@ fn training(c: &mut Criterion) {
         group.sample_size(10).warm_up_time(Duration::from_secs(1));
         let p = config.patch_size;
         for (stage, batch) in [(1usize, 256usize), (2, 128), (3, 128)] {
-            let mut model = Hf2Vad::new(&config, &device, &mut NoiseRng::new(2)).expect("model");
-            if stage == 2 {
-                model.memae = model.memae.freeze();
-            }
-            let mut optim = AdamConfig::new().with_epsilon(1e-7).init();
-            let mut rng = NoiseRng::new(3);
             let (frames, flows) = cubes(&config, batch, 9);
             let frames = tensor(frames, [batch, config.cube_frame_channels(), p, p], &device);
             let flows = tensor(flows, [batch, config.cube_flow_channels(), p, p], &device);
-            let mut slot = Some(model);
             group.throughput(Throughput::Elements(batch as u64));
-            group.bench_function(BenchmarkId::new(format!("stage{stage}"), batch), |b| {
-                b.iter(|| {
+            for path in training_paths() {
+                let mut model =
+                    Hf2Vad::new(&config, &device, &mut NoiseRng::new(2)).expect("model");
+                if stage == 2 {
+                    model.memae = model.memae.freeze();
+                }
+                let mut optim = AdamConfig::new().with_epsilon(1e-7).init();
+                let mut rng = NoiseRng::new(3);
+                let mut slot = Some(model);
+                let mut step = || {
                     let mut model = slot.take().expect("model");
                     model = match stage {
                         1 => {
@@ -128,8 +143,15 @@ fn training(c: &mut Criterion) {
                         }
                     };
                     slot = Some(model);
-                })
-            });
+                };
+                let id = BenchmarkId::new(format!("stage{stage}/{path}"), batch);
+                group.bench_function(id, |b| {
+                    b.iter(|| match path {
+                        "burn_conv" => with_burn_convolutions(&mut step),
+                        _ => step(),
+                    })
+                });
+            }
         }
         group.finish();
     }

@@ -15,6 +15,7 @@
 //! The memory modules' addressing product Q·Mᵀ ([`memory_scores`]) is here too: asked for in
 //! the orientation burn asks for it, gemm copies the whole memory matrix on every read.
 
+pub mod training;
 mod winograd;
 
 use std::cell::RefCell;
@@ -405,10 +406,18 @@ impl GemmConvTranspose2d {
 
     /// Applies the layer to `x` [B, C_in, H, W].
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
+        let [_, _, h, w] = x.dims();
+        let size = [self.output_side(h), self.output_side(w)];
+        self.forward_to(x, size)
+    }
+
+    /// Applies the layer to `x` with an output of `[oh, ow]`, any size the kernel's reach
+    /// allows: a convolution's input gradient is this product cut to the input's size,
+    /// which its output padding does not fix per axis.
+    fn forward_to(&self, x: Tensor<4>, [oh, ow]: [usize; 2]) -> Tensor<4> {
         let device = x.device();
         let [batch, cin, h, w] = x.dims();
         assert_eq!(cin, self.cin, "GemmConvTranspose2d: input channels");
-        let (oh, ow) = (self.output_side(h), self.output_side(w));
         let input = CpuValues::new(x);
         let input = input.as_slice();
         let kk = self.geometry.kernel * self.geometry.kernel;
@@ -778,6 +787,46 @@ unsafe fn matmul(
             1,
             n as isize,
             0.0,
+            1.0,
+            false,
+            false,
+            false,
+            parallelism,
+        );
+    }
+}
+
+/// `dst` [M, N] += `lhs` [M, K] · `rhs`ᵀ, with `rhs` stored row-major as [N, K]: the
+/// weight gradients' product of two unfolded operands that share their long axis K.
+///
+/// # Safety
+/// `dst` must hold M·N values, `lhs` M·K and `rhs` N·K.
+unsafe fn matmul_accumulate_transposed(
+    dst: &mut [f32],
+    lhs: &[f32],
+    rhs: &[f32],
+    [m, k, n]: [usize; 3],
+    parallelism: gemm::Parallelism,
+) {
+    debug_assert!(dst.len() >= m * n && lhs.len() >= m * k && rhs.len() >= n * k);
+    // SAFETY: the caller guarantees the buffer sizes; `rhs` read with row stride 1 and
+    // column stride K is the [K, N] transpose of its row-major [N, K] values.
+    unsafe {
+        gemm::gemm(
+            m,
+            n,
+            k,
+            dst.as_mut_ptr(),
+            1,
+            n as isize,
+            true,
+            lhs.as_ptr(),
+            1,
+            k as isize,
+            rhs.as_ptr(),
+            k as isize,
+            1,
+            1.0,
             1.0,
             false,
             false,

@@ -8,11 +8,10 @@ use burn::nn::Initializer;
 use burn::nn::PaddingConfig2d;
 use burn::nn::conv::{Conv2d, Conv2dConfig, ConvTranspose2d, ConvTranspose2dConfig};
 use burn::tensor::activation::elu;
-use burn::tensor::module::{batch_norm_train, conv2d};
-use burn::tensor::ops::ConvOptions;
+use burn::tensor::module::batch_norm_train;
 use burn::tensor::{Device, Tensor, TensorData};
 
-use super::gemm_conv::{Activation, ConvGeometry, GemmConv2d};
+use super::gemm_conv::{Activation, ConvGeometry, GemmConv2d, training};
 use super::rng::NoiseRng;
 
 /// A parameter holding `values` with `shape` on `device`.
@@ -201,13 +200,13 @@ impl WeightNormConv2d {
         v * (self.weight_g.val() / norm)
     }
 
-    fn options(&self) -> ConvOptions<2> {
-        ConvOptions::new(
-            [self.stride, self.stride],
-            [self.padding, self.padding],
-            [1, 1],
-            1,
-        )
+    fn geometry(&self) -> ConvGeometry {
+        let [.., kernel] = self.weight_v.dims();
+        ConvGeometry {
+            kernel,
+            stride: self.stride,
+            padding: self.padding,
+        }
     }
 }
 
@@ -266,11 +265,11 @@ impl NormConv2d {
         if let Some(cache) = self.lowered_for(&x, false, 0.0) {
             return cache.forward(x);
         }
-        let out = conv2d(
+        let out = training::conv2d(
             x,
             self.conv.weight(),
-            Some(self.conv.bias.val()),
-            self.conv.options(),
+            self.conv.bias.val(),
+            self.conv.geometry(),
         );
         out * self.gamma.val() + self.beta.val()
     }
@@ -283,13 +282,7 @@ impl NormConv2d {
         let gamma_col = gamma.clone().reshape([cout, 1, 1, 1]);
         let weight = self.conv.weight() * gamma_col;
         let bias = self.conv.bias.val() * gamma.reshape([cout]) + self.beta.val().reshape([cout]);
-        let [.., kernel, _] = weight.dims();
-        let geometry = ConvGeometry {
-            kernel,
-            stride: self.conv.stride,
-            padding: self.conv.padding,
-        };
-        GemmConv2d::new(weight, bias, geometry, Activation::Identity)
+        GemmConv2d::new(weight, bias, self.conv.geometry(), Activation::Identity)
     }
 
     /// The layer with its folded form cached for inference (see [`NormConv2d::cache`]).

@@ -7,7 +7,9 @@ use burn::tensor::activation::{relu, softmax};
 use burn::tensor::{Device, Tensor};
 
 use super::config::{ModelConfig, SkipOp};
-use super::gemm_conv::{Activation, ConvGeometry, GemmConv2d, GemmConvTranspose2d, memory_scores};
+use super::gemm_conv::{
+    Activation, ConvGeometry, GemmConv2d, GemmConvTranspose2d, memory_scores, training,
+};
 use super::layers::{BatchNorm2d, kaiming_conv, param, upsampling_conv};
 use super::rng::NoiseRng;
 
@@ -54,8 +56,8 @@ impl DoubleConv {
         {
             return second.forward(first.forward(x));
         }
-        let x = relu(self.bn1.forward(self.conv1.forward(x)));
-        relu(self.bn2.forward(self.conv2.forward(x)))
+        let x = relu(self.bn1.forward(conv_forward(&self.conv1, x)));
+        relu(self.bn2.forward(conv_forward(&self.conv2, x)))
     }
 }
 
@@ -92,7 +94,7 @@ impl Down {
     pub fn forward(&self, x: Tensor<4>) -> Tensor<4> {
         let x = match &self.lowered {
             Some(conv) if !x.device().is_autodiff() => conv.forward(x),
-            _ => self.conv.forward(x),
+            _ => conv_forward(&self.conv, x),
         };
         self.double.forward(x)
     }
@@ -128,16 +130,12 @@ impl Up {
 
     fn lowered(self) -> Self {
         let up = &self.up;
-        let bias = up.bias.as_ref().map_or_else(
-            || Tensor::zeros([up.channels[1]], &up.weight.device()),
-            |b| b.val(),
+        let lowered = GemmConvTranspose2d::new(
+            up.weight.val(),
+            transposed_bias(up),
+            transposed_geometry(up),
+            up.padding_out[0],
         );
-        let geometry = ConvGeometry {
-            kernel: up.kernel_size[0],
-            stride: up.stride[0],
-            padding: up.padding[0],
-        };
-        let lowered = GemmConvTranspose2d::new(up.weight.val(), bias, geometry, up.padding_out[0]);
         Self {
             lowered: Some(lowered),
             double: self.double.lowered(),
@@ -158,7 +156,13 @@ impl Up {
             };
             return second.forward(first.forward_fused(parts, Activation::Identity, false));
         }
-        let up = self.up.forward(x);
+        let up = training::conv_transpose2d(
+            x,
+            self.up.weight.val(),
+            transposed_bias(&self.up),
+            transposed_geometry(&self.up),
+            self.up.padding_out[0],
+        );
         let fused = if self.concat {
             Tensor::cat(vec![skip, up], 1)
         } else {
@@ -369,7 +373,7 @@ impl MlMemAeSc {
         let h = self.up_1.forward(h, x0);
         let recon = match &self.out_lowered {
             Some(conv) if !h.device().is_autodiff() => conv.forward(h),
-            _ => self.out_conv.forward(h),
+            _ => conv_forward(&self.out_conv, h),
         };
 
         let attention =
@@ -394,14 +398,11 @@ impl MlMemAeSc {
 /// with s = γ/√(σ² + ε).
 fn lower_conv(conv: &Conv2d, bn: Option<&BatchNorm2d>, activation: Activation) -> GemmConv2d {
     let weight = conv.weight.val();
-    let [cout, _, kernel, _] = weight.dims();
-    let device = weight.device();
-    let bias = conv
-        .bias
-        .as_ref()
-        .map_or_else(|| Tensor::zeros([cout], &device), |b| b.val());
+    let [cout, ..] = weight.dims();
+    let bias = conv_bias(conv);
     let (weight, bias) = match bn {
         Some(bn) => {
+            let device = weight.device();
             let var = bn.running_var.value_sync().to_device(&device);
             let mean = bn.running_mean.value_sync().to_device(&device);
             let scale = bn.weight.val() / var.add_scalar(bn.eps).sqrt();
@@ -410,15 +411,50 @@ fn lower_conv(conv: &Conv2d, bn: Option<&BatchNorm2d>, activation: Activation) -
         }
         None => (weight, bias),
     };
+    GemmConv2d::new(weight, bias, conv_geometry(conv), activation)
+}
+
+/// `conv` applied to `x` through the lowering, differentiable when `x` is on the training
+/// device (see [`training`]).
+fn conv_forward(conv: &Conv2d, x: Tensor<4>) -> Tensor<4> {
+    training::conv2d(x, conv.weight.val(), conv_bias(conv), conv_geometry(conv))
+}
+
+/// `conv`'s bias, zero where it has none.
+fn conv_bias(conv: &Conv2d) -> Tensor<1> {
+    let weight = conv.weight.val();
+    conv.bias.as_ref().map_or_else(
+        || Tensor::zeros([weight.dims()[0]], &weight.device()),
+        |b| b.val(),
+    )
+}
+
+fn conv_geometry(conv: &Conv2d) -> ConvGeometry {
+    let [.., kernel] = conv.weight.dims();
     let padding = match conv.padding {
         burn::nn::PaddingConfig2d::Explicit(top, ..) => top,
         burn::nn::PaddingConfig2d::Valid => 0,
         burn::nn::PaddingConfig2d::Same => kernel / 2,
     };
-    let geometry = ConvGeometry {
+    ConvGeometry {
         kernel,
         stride: conv.stride[0],
         padding,
-    };
-    GemmConv2d::new(weight, bias, geometry, activation)
+    }
+}
+
+/// `up`'s bias, zero where it has none.
+fn transposed_bias(up: &ConvTranspose2d) -> Tensor<1> {
+    up.bias.as_ref().map_or_else(
+        || Tensor::zeros([up.channels[1]], &up.weight.device()),
+        |b| b.val(),
+    )
+}
+
+fn transposed_geometry(up: &ConvTranspose2d) -> ConvGeometry {
+    ConvGeometry {
+        kernel: up.kernel_size[0],
+        stride: up.stride[0],
+        padding: up.padding[0],
+    }
 }

@@ -1,10 +1,12 @@
 //! The three training stages on a tiny model and synthetic cubes: losses fall, the final
 //! checkpoint reproduces the model's outputs, and an interrupted run resumes to exactly the
-//! result of an uninterrupted one.
+//! result of an uninterrupted one; the lowered convolutions train the same loss curve as
+//! burn's own.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
+use vadscope::model::gemm_conv::training::with_burn_convolutions;
 use vadscope::model::{Detector, ModelConfig, NoiseRng, read_checkpoint_meta};
 use vadscope::train::{
     CubeSet, LrSchedule, StageConfig, TrainConfig, TrainEvent, TrainReport, train,
@@ -225,4 +227,71 @@ fn interrupted_training_resumes_to_the_same_model() {
     )
     .expect_err("mismatched run");
     assert!(err.to_string().contains("another model config"), "{err}");
+}
+
+/// Each stage's epoch losses, train and validation, in event order.
+fn epoch_losses(events: &[TrainEvent]) -> Vec<(usize, f64, f64)> {
+    events
+        .iter()
+        .filter_map(|e| match e {
+            TrainEvent::EpochDone {
+                stage,
+                train_loss,
+                val_loss,
+                ..
+            } => Some((*stage, *train_loss, val_loss.expect("validation loss"))),
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn lowered_convolutions_train_the_same_loss_curve_as_burns() {
+    // The reference's learning rates: Adam moves every weight by about the learning rate
+    // whatever its gradient's size, so the rounding differences of two correct gradients
+    // reach the loss in proportion to it.
+    let config = TrainConfig {
+        stage1: StageConfig {
+            lr: 1e-4,
+            ..tiny_training(2).stage1
+        },
+        stage2: StageConfig {
+            lr: 1e-4,
+            ..tiny_training(2).stage2
+        },
+        stage3: StageConfig {
+            lr: 8e-5,
+            ..tiny_training(2).stage3
+        },
+        ..tiny_training(2)
+    };
+    let run = |dir: &Path| {
+        let mut events = Vec::new();
+        let model = tiny_config(ModelConfig::paper());
+        train(&model, &config, &synthetic_cubes(), dir, &mut |e| {
+            events.push(e.clone())
+        })
+        .expect("training");
+        epoch_losses(&events)
+    };
+    let (lowered_dir, burn_dir) = (
+        tempfile::tempdir().expect("dir"),
+        tempfile::tempdir().expect("dir"),
+    );
+    let lowered = run(lowered_dir.path());
+    let burn = with_burn_convolutions(|| run(burn_dir.path()));
+    // Two epochs of three steps per stage, all three stages.
+    assert_eq!(
+        lowered.iter().map(|l| l.0).collect::<Vec<_>>(),
+        [1, 1, 2, 2, 3, 3]
+    );
+    for ((stage, train, val), (_, burn_train, burn_val)) in lowered.iter().zip(&burn) {
+        for (ours, reference) in [(train, burn_train), (val, burn_val)] {
+            let error = (ours - reference).abs() / reference.abs().max(1e-12);
+            assert!(
+                error <= 1e-4,
+                "stage {stage}: loss {ours} through the lowered path, {reference} through burn's"
+            );
+        }
+    }
 }
