@@ -8,6 +8,7 @@ use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use vadscope::model::{BoxFilter, FlowUnits, ModelConfig, TrainingStats, read_checkpoint_meta};
+use vadscope::sequence::Scenario;
 use vadscope::train::scenarios::{
     CubeExtraction, TrainRequest, scenario_folders, train_from_scenarios,
 };
@@ -111,9 +112,13 @@ pub struct TrainArgs {
     /// --box-filter).
     #[arg(long, value_name = "F", conflicts_with = "init")]
     min_box_area: Option<f32>,
-    /// Units of the flows the model sees: `native` pixels (the reference) or `patch`
-    /// pixels (each box's motion divided by its size, so near and far objects compare).
-    #[arg(long, value_enum, conflicts_with = "init")]
+    /// Units of the flows the model sees: `native` pixels (the reference), `patch` pixels
+    /// (each box's motion divided by its size, so near and far objects compare) or
+    /// `frame-width` (native pixels rescaled to the width of the training frames, so the
+    /// model reads the same motion at any resolution). With --init only `frame-width`, and
+    /// only for a model trained on native pixels of frames as wide as --data's: it names
+    /// the units those cubes already have, for scoring at other resolutions.
+    #[arg(long, value_enum)]
     flow_units: Option<FlowUnitsArg>,
     /// ML-MemAE-SC reconstructs a cube's flows jointly (all of them in one pass) instead of
     /// each on its own as the reference does.
@@ -168,6 +173,7 @@ enum BoxFilterArg {
 enum FlowUnitsArg {
     Native,
     Patch,
+    FrameWidth,
 }
 
 /// The model presets `--preset` can choose.
@@ -199,6 +205,11 @@ fn with_model_options(mut model: ModelConfig, args: &TrainArgs) -> anyhow::Resul
     match args.flow_units {
         Some(FlowUnitsArg::Native) => model.conventions.flow_units = FlowUnits::NativePixels,
         Some(FlowUnitsArg::Patch) => model.conventions.flow_units = FlowUnits::Patch,
+        Some(FlowUnitsArg::FrameWidth) => {
+            model.conventions.flow_units = FlowUnits::FrameWidth {
+                width: training_frame_width(&args.data)?,
+            }
+        }
         None => {}
     }
     if args.joint_flows {
@@ -211,6 +222,36 @@ fn with_model_options(mut model: ModelConfig, args: &TrainArgs) -> anyhow::Resul
         .validate()
         .context("the model options do not describe a usable model")?;
     Ok(model)
+}
+
+/// The frame width of the first training scenario under `data`: the reference width of
+/// `--flow-units frame-width`.
+fn training_frame_width(data: &[PathBuf]) -> anyhow::Result<u32> {
+    let folders = scenario_folders(data)?;
+    let first = folders
+        .first()
+        .with_context(|| "--flow-units frame-width needs at least one training scenario")?;
+    let scenario = Scenario::open(first)
+        .with_context(|| format!("cannot open the training scenario {}", first.display()))?;
+    Ok(scenario.resolution().0)
+}
+
+/// Refuses `--flow-units` with `--init` unless it only names the units the initial model's
+/// cubes already have: native pixels of frames as wide as the training data's.
+fn check_init_flow_units(initial: &ModelConfig, args: &TrainArgs) -> anyhow::Result<()> {
+    let Some(units) = args.flow_units else {
+        return Ok(());
+    };
+    if units != FlowUnitsArg::FrameWidth
+        || initial.conventions.flow_units != FlowUnits::NativePixels
+    {
+        bail!(
+            "--flow-units with --init only turns native-pixel flows into frame-width units \
+             (the initial model's are {:?}); train a new model to change units",
+            initial.conventions.flow_units
+        );
+    }
+    Ok(())
 }
 
 /// The training settings: `--config` (or the defaults), then the command-line overrides.
@@ -314,7 +355,11 @@ pub fn run(args: TrainArgs) -> anyhow::Result<ExitCode> {
             .context("cannot set up the worker threads")?;
     }
     let model = match (&args.init, &args.model_config) {
-        (Some(path), _) => read_checkpoint_meta(path)?.config,
+        (Some(path), _) => {
+            let initial = read_checkpoint_meta(path)?.config;
+            check_init_flow_units(&initial, &args)?;
+            initial
+        }
         (None, Some(path)) => model_config(path)?,
         (None, None) => args.preset.unwrap_or(PresetArg::Compact).config(),
     };

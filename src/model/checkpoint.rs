@@ -261,5 +261,14 @@ mod tests {
             config.cube_flow_channels() * p * p
         );
         assert!(out.iter().all(|c| c.s_r.is_finite() && c.s_r > 0.0));
+
+        // Frame-width flow units keep their reference width.
+        config.conventions.flow_units = FlowUnits::FrameWidth { width: 768 };
+        let meta = CheckpointMeta {
+            config: config.clone(),
+            ..meta
+        };
+        save_checkpoint(&path, &model, &meta).expect("save");
+        assert_eq!(read_checkpoint_meta(&path).expect("meta").config, config);
     }
 }

@@ -45,6 +45,16 @@ pub enum FlowUnits {
     /// keeps native pixels). The factors depend on the box, so they are applied where the
     /// cube is cut ([`super::stc`]); [`FlowUnits::factors`] is (1, 1) for this variant.
     Patch,
+    /// Displacements in pixels of a frame `width` pixels wide: native u and v are multiplied
+    /// by `width` / the frame's width, so a model trained on frames of one width reads the
+    /// same motion in frames of another (vadscope's option beyond the paper: native pixels
+    /// halve with the resolution). The factor depends on the frame, so, as for
+    /// [`FlowUnits::Patch`], it is applied where the cube is cut and [`FlowUnits::factors`]
+    /// is (1, 1).
+    FrameWidth {
+        /// The width the flows are rescaled to, normally the training frames'.
+        width: u32,
+    },
     /// Displacements in pixels of a resized grid: native u is multiplied by `x` and native v
     /// by `y` before the model sees them. The reference leaves FlowNet2 flows in its input
     /// grid (e.g. 1024×640 for 768×512 CARLA frames: x = 4/3, y = 5/4).
@@ -60,7 +70,7 @@ impl FlowUnits {
     /// The (u, v) factors that turn native-pixel flows into the model's units.
     pub fn factors(&self) -> [f32; 2] {
         match self {
-            FlowUnits::NativePixels | FlowUnits::Patch => [1.0, 1.0],
+            FlowUnits::NativePixels | FlowUnits::Patch | FlowUnits::FrameWidth { .. } => [1.0, 1.0],
             FlowUnits::Scaled { x, y } => [*x, *y],
         }
     }
@@ -311,6 +321,9 @@ impl ModelConfig {
             && !(x.is_finite() && y.is_finite() && x > 0.0 && y > 0.0)
         {
             return bad(format!("flow scale factors ({x}, {y}) must be positive"));
+        }
+        if self.conventions.flow_units == (FlowUnits::FrameWidth { width: 0 }) {
+            return bad("the flows' reference frame width must be positive".into());
         }
         self.box_filter.validate()?;
         if !(1..=MAX_SCORE_BANDS).contains(&self.score_bands) {

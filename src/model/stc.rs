@@ -32,6 +32,8 @@ pub struct CubeGeometry {
     pub patch: usize,
     /// Flows in patch pixels ([`FlowUnits::Patch`]) instead of native pixels.
     pub patch_units: bool,
+    /// Native pixels rescaled to a frame this wide ([`FlowUnits::FrameWidth`]).
+    pub frame_width: Option<u32>,
 }
 
 impl CubeGeometry {
@@ -41,6 +43,10 @@ impl CubeGeometry {
             clip_hist: config.clip_hist,
             patch: config.patch_size,
             patch_units: config.conventions.flow_units == FlowUnits::Patch,
+            frame_width: match config.conventions.flow_units {
+                FlowUnits::FrameWidth { width } => Some(width),
+                _ => None,
+            },
         }
     }
 }
@@ -177,14 +183,16 @@ pub fn cubes_at(
         for (f, out) in frames.iter().zip(cube_frames.chunks_mut(3 * area)) {
             crop_frame(f, (xr, yr), patch, out);
         }
-        // Patch units: the displacement as it appears in the P×P patch.
-        let flow_scale = if geometry.patch_units {
-            [
+        // Patch units: the displacement as it appears in the P×P patch; frame-width units:
+        // as it would appear in a frame of the reference width (one factor for both axes,
+        // so the motion keeps its direction).
+        let flow_scale = match (geometry.patch_units, geometry.frame_width) {
+            (true, _) => [
                 patch as f32 / (xr.1 - xr.0) as f32,
                 patch as f32 / (yr.1 - yr.0) as f32,
-            ]
-        } else {
-            [1.0, 1.0]
+            ],
+            (false, Some(reference)) => [reference as f32 / width as f32; 2],
+            (false, None) => [1.0, 1.0],
         };
         let mut cube_flows = vec![0f32; 2 * clip_hist * area];
         for (f, out) in flows.iter().zip(cube_flows.chunks_mut(2 * area)) {
@@ -248,6 +256,7 @@ mod tests {
             clip_hist,
             patch,
             patch_units: false,
+            frame_width: None,
         }
     }
 
@@ -367,5 +376,40 @@ mod tests {
         assert_eq!(cubes[0].flow_scale, [0.25, 0.5]);
         assert_eq!(cubes[0].flows[0], 2.0 * 0.25, "u in patch pixels");
         assert_eq!(cubes[0].flows[64], 4.0 * 0.5, "v in patch pixels");
+    }
+
+    #[test]
+    fn frame_width_units_rescale_the_motion_to_the_reference_width() {
+        // Frames 64 wide, flows rescaled to a 128-wide frame: u and v doubled, on top of the
+        // grid rescale (a 32×24 flow grid for 64×48 frames).
+        let mut small = FlowField::zeros(32, 24);
+        for px in small.uv.chunks_mut(2) {
+            px[0] = 1.0;
+            px[1] = 2.0;
+        }
+        let small = Arc::new(small);
+        let geometry = CubeGeometry {
+            frame_width: Some(128),
+            ..geometry(4, 8)
+        };
+        let cubes = cubes_at(
+            4,
+            &[bbox(8.0, 8.0, 40.0, 24.0)],
+            geometry,
+            &mut |k| Ok(frame(k)),
+            &mut |_| Ok(Some(small.clone())),
+        )
+        .expect("cubes");
+        assert_eq!(cubes[0].flow_scale, [2.0, 2.0]);
+        assert_eq!(
+            cubes[0].flows[0],
+            2.0 * 2.0,
+            "u in pixels of a 128-wide frame"
+        );
+        assert_eq!(
+            cubes[0].flows[64],
+            4.0 * 2.0,
+            "v in pixels of a 128-wide frame"
+        );
     }
 }

@@ -27,7 +27,7 @@ use crate::model::inference::to_model_conventions;
 use crate::model::layers::tensor;
 use crate::model::losses::{stage1_loss, stage2_loss, stage3_loss};
 use crate::model::{
-    CheckpointMeta, Detector, Hf2Vad, Latents, ModelConfig, NoiseRng, StatsAccumulator,
+    CheckpointMeta, Detector, FlowUnits, Hf2Vad, Latents, ModelConfig, NoiseRng, StatsAccumulator,
     TrainingStats, load_checkpoint, save_checkpoint,
 };
 
@@ -329,13 +329,21 @@ fn prepare_for_stage(mut model: Hf2Vad, stage: usize) -> Hf2Vad {
 }
 
 /// The model of the vadscope checkpoint `path`, which must have been made with `config`
-/// (up to the score bands, which only shape the statistics computed after training).
+/// (up to the score bands, which only shape the statistics computed after training, and
+/// native-pixel flows named frame-width units, which the caller vouches leave the cubes
+/// as they were).
 fn initial_model(path: &Path, config: &ModelConfig, device: &Device) -> Result<Hf2Vad, TrainError> {
     let checkpoint = load_checkpoint(path, device)?;
-    let same_network = ModelConfig {
+    let mut same_network = ModelConfig {
         score_bands: config.score_bands,
         ..checkpoint.meta.config.clone()
     };
+    if let (FlowUnits::NativePixels, FlowUnits::FrameWidth { .. }) = (
+        same_network.conventions.flow_units,
+        config.conventions.flow_units,
+    ) {
+        same_network.conventions.flow_units = config.conventions.flow_units;
+    }
     if same_network != *config {
         return Err(TrainError::file(
             path,

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
 use burn::tensor::Device;
-use vadscope::model::{Detector, ModelConfig, load_checkpoint};
+use vadscope::model::{Detector, FlowUnits, ModelConfig, load_checkpoint};
 use vadscope::train::CubeSet;
 
 use crate::support::cli::{text, vadscope};
@@ -167,6 +167,48 @@ fn training_lowers_the_loss_and_writes_a_checkpoint_with_statistics() {
     assert_eq!(
         banded_stats.flow_score, stats.flow_score,
         "same model, same cubes"
+    );
+
+    // Frame-width flow units named for the native-pixel model: the data's width recorded,
+    // and at that width the cubes, so the statistics, are the same.
+    let widths = dir.path().join("frame-width");
+    let relabelled = run(&tiny(
+        &data,
+        &widths,
+        None,
+        &[
+            "--init",
+            &init,
+            "--epochs",
+            "0",
+            "--flow-units",
+            "frame-width",
+        ],
+    ));
+    assert!(relabelled.status.success(), "{}", text(&relabelled.stderr));
+    let relabelled = load_checkpoint(&widths.join("model.safetensors"), &Device::flex())
+        .expect("relabelled checkpoint loads");
+    assert_eq!(
+        relabelled.meta.config.conventions.flow_units,
+        FlowUnits::FrameWidth { width: 96 }
+    );
+    assert_eq!(
+        relabelled.meta.stats.expect("statistics").flow_score,
+        stats.flow_score,
+        "same cubes at the training width"
+    );
+    // Other units cannot be given to a trained model.
+    let refused = run(&tiny(
+        &data,
+        &dir.path().join("patch"),
+        None,
+        &["--init", &init, "--epochs", "0", "--flow-units", "patch"],
+    ));
+    assert!(!refused.status.success());
+    assert!(
+        text(&refused.stderr).contains("train a new model to change units"),
+        "{}",
+        text(&refused.stderr)
     );
 
     let again = run(&tiny(&data, &out, Some(&model), &["--epochs", "3"]));
