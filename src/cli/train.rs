@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::time::Instant;
 
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
@@ -435,6 +436,8 @@ struct Progress {
     bar: Option<ProgressBar>,
     epochs: usize,
     steps_per_epoch: usize,
+    /// When the running epoch started: its line gives its wall time.
+    epoch_started: Option<Instant>,
 }
 
 impl Progress {
@@ -460,6 +463,7 @@ impl Progress {
                     });
                 }
                 self.bar = Some(bar);
+                self.epoch_started = Some(Instant::now());
             }
             TrainEvent::Step {
                 epoch, step, loss, ..
@@ -482,9 +486,13 @@ impl Progress {
                 best,
             } => {
                 let val = val_loss.map_or("-".to_string(), |v| format!("{v:.6}"));
+                let seconds = self
+                    .epoch_started
+                    .replace(Instant::now())
+                    .map_or(0.0, |t| t.elapsed().as_secs_f64());
                 let line = format!(
                     "stage {stage} {} epoch {}/{}: train loss {train_loss:.6}, validation loss \
-                     {val}, lr {lr:.2e}{}",
+                     {val}, lr {lr:.2e}, {seconds:.1} s{}",
                     stage_name(stage),
                     epoch + 1,
                     self.epochs,
