@@ -6,6 +6,7 @@
 pub mod config;
 pub mod cubes;
 pub mod error;
+mod model_files;
 pub mod scenarios;
 pub mod stages;
 

@@ -11,14 +11,12 @@
 //! | `stage{1,2,3}_best.bpk` | the model at the best validation epoch of each stage |
 //! | `model.safetensors` | the final vadscope checkpoint (config, training statistics) |
 //!
-//! Burnpack keeps parameter ids, which the optimizer state is keyed by; that is why resume
-//! files are burnpack while the deliverable is a safetensors checkpoint.
+//! The model files are named and written in [`super::model_files`].
 
 use std::path::{Path, PathBuf};
 
 use burn::module::Module;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
-use burn::store::{BurnpackStore, ModuleSnapshot};
 use burn::tensor::{Device, Tensor};
 use serde::{Deserialize, Serialize};
 
@@ -27,13 +25,16 @@ use crate::model::inference::to_model_conventions;
 use crate::model::layers::tensor;
 use crate::model::losses::{stage1_loss, stage2_loss, stage3_loss};
 use crate::model::{
-    CheckpointMeta, Detector, FlowUnits, Hf2Vad, Latents, ModelConfig, NoiseRng, StatsAccumulator,
-    TrainingStats, load_checkpoint, save_checkpoint,
+    CheckpointMeta, Detector, Hf2Vad, Latents, ModelConfig, NoiseRng, StatsAccumulator,
+    TrainingStats, save_checkpoint,
 };
 
 use super::config::TrainConfig;
 use super::cubes::CubeSet;
 use super::error::TrainError;
+use super::model_files::{
+    FINAL, LAST_MODEL, LAST_OPTIM, best_file, initial_model, load_model, save_model,
+};
 
 /// Progress reported to the caller.
 #[derive(Debug, Clone, PartialEq)]
@@ -120,14 +121,6 @@ struct TrainState {
 }
 
 const STATE: &str = "state.json";
-const LAST_MODEL: &str = "last_model.bpk";
-const LAST_OPTIM: &str = "last_optim.bpk";
-const FINAL: &str = "model.safetensors";
-
-fn best_file(stage: usize) -> String {
-    format!("stage{stage}_best.bpk")
-}
-
 /// Trains a model of `model_config` on the normal cubes `data` through the three stages,
 /// writing checkpoints to `out_dir` and resuming from them when the folder holds an
 /// unfinished run of the same configuration. The weights start from the seeded random
@@ -326,54 +319,6 @@ fn prepare_for_stage(mut model: Hf2Vad, stage: usize) -> Hf2Vad {
         model.memae.unfreeze()
     };
     model
-}
-
-/// The model of the vadscope checkpoint `path`, which must have been made with `config`
-/// (up to the score bands, which only shape the statistics computed after training, and
-/// native-pixel flows named frame-width units, which the caller vouches leave the cubes
-/// as they were).
-fn initial_model(path: &Path, config: &ModelConfig, device: &Device) -> Result<Hf2Vad, TrainError> {
-    let checkpoint = load_checkpoint(path, device)?;
-    let mut same_network = ModelConfig {
-        score_bands: config.score_bands,
-        ..checkpoint.meta.config.clone()
-    };
-    if let (FlowUnits::NativePixels, FlowUnits::FrameWidth { .. }) = (
-        same_network.conventions.flow_units,
-        config.conventions.flow_units,
-    ) {
-        same_network.conventions.flow_units = config.conventions.flow_units;
-    }
-    if same_network != *config {
-        return Err(TrainError::file(
-            path,
-            format!(
-                "the checkpoint's model config (preset '{}') differs from the one being \
-                 trained (preset '{}')",
-                checkpoint.meta.config.preset, config.preset
-            ),
-        ));
-    }
-    Ok(checkpoint.model)
-}
-
-fn load_model(model: &mut Hf2Vad, path: &Path) -> Result<(), TrainError> {
-    let mut store = BurnpackStore::from_file(path);
-    model
-        .load_from(&mut store)
-        .map_err(|e| TrainError::file(path, e))?;
-    Ok(())
-}
-
-fn save_model(model: &Hf2Vad, path: &Path) -> Result<(), TrainError> {
-    write_atomically_with(path, |scratch| {
-        // valid() folds pending BatchNorm running-stat updates in and keeps parameter ids.
-        let mut store = BurnpackStore::from_file(scratch).overwrite(true);
-        model
-            .valid()
-            .save_into(&mut store)
-            .map_err(|e| TrainError::file(scratch, e))
-    })
 }
 
 fn read_state(dir: &Path) -> Result<Option<TrainState>, TrainError> {
