@@ -8,12 +8,15 @@ use std::time::Instant;
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
+use vadscope::flow::FlowSource;
 use vadscope::model::{BoxFilter, FlowUnits, ModelConfig, TrainingStats, read_checkpoint_meta};
 use vadscope::sequence::Scenario;
 use vadscope::train::scenarios::{
     CubeExtraction, TrainRequest, scenario_folders, train_from_scenarios,
 };
 use vadscope::train::{StageSummary, TrainConfig, TrainEvent, TrainReport};
+
+use super::score::parse_flow_source;
 
 /// Name of the extracted-cube cache inside the output folder.
 const CUBE_FILE: &str = "cubes.safetensors";
@@ -132,6 +135,12 @@ pub struct TrainArgs {
     /// them for a trained model.
     #[arg(long, value_name = "N")]
     score_bands: Option<usize>,
+    /// Where the cubes' flows come from: `stored` (the scenarios' OPTICAL_FLOW, the
+    /// default), `dis[:preset]` (estimated with DIS as scoring estimates the flow of data
+    /// without stored flow, cached in each scenario's `.vadscope/flow/`), `auto[:preset]`
+    /// (stored where present, else DIS).
+    #[arg(long, default_value = "stored", value_name = "stored|dis[:preset]", value_parser = parse_flow_source)]
+    flow: FlowSource,
     /// Worker threads of the CPU backend (default: all cores).
     #[arg(long, value_name = "N")]
     threads: Option<usize>,
@@ -389,6 +398,7 @@ pub fn run(args: TrainArgs) -> anyhow::Result<ExitCode> {
         out_dir: args.out.clone(),
         extraction: CubeExtraction {
             frame_stride: args.frame_stride,
+            flow: args.flow,
             ..CubeExtraction::for_model(&model)
         },
         model,

@@ -36,6 +36,7 @@ mod metrics;
 mod params;
 mod plane;
 mod simd;
+pub mod source;
 mod variational;
 
 pub use colorize::{
@@ -46,5 +47,6 @@ pub use error::FlowError;
 pub use metrics::{EndpointError, PixelBox, box_endpoint_error, crop_resize_flow, endpoint_error};
 pub use params::{DisParams, DisPreset, SUPPORTED_PATCH_SIZES};
 pub use plane::FlowFrame;
+pub use source::{FlowProvider, FlowSource};
 
 pub use crate::sequence::FlowField;

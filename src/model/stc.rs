@@ -18,7 +18,7 @@ use std::sync::Arc;
 use image::RgbImage;
 
 use crate::box_crop::{Crop, crop_range, resize_crop};
-use crate::sequence::{BoxRecord, FlowField, Scenario};
+use crate::sequence::{BoxRecord, FlowField};
 
 use super::config::{FlowUnits, ModelConfig};
 use super::error::ModelError;
@@ -217,29 +217,6 @@ pub fn cubes_at(
         });
     }
     Ok(cubes)
-}
-
-/// The cubes of frame `index` of `scenario` for `boxes` (normally `scenario.boxes(index)`),
-/// from its frames and the flows it stores.
-pub fn scenario_cubes(
-    scenario: &Scenario,
-    index: usize,
-    boxes: &[BoxRecord],
-    geometry: CubeGeometry,
-) -> Result<Vec<Cube>, ModelError> {
-    let root = scenario.root().display().to_string();
-    let wrap = |e: crate::sequence::SequenceError| ModelError::Cube(format!("{root}: {e}"));
-    cubes_at(
-        index,
-        boxes,
-        geometry,
-        &mut |k| scenario.rgb(k).map_err(wrap),
-        &mut |k| scenario.flow(k).map_err(wrap),
-    )
-    .map_err(|e| match e {
-        ModelError::Cube(m) if !m.starts_with(&root) => ModelError::Cube(format!("{root}: {m}")),
-        other => other,
-    })
 }
 
 #[cfg(test)]

@@ -9,8 +9,8 @@ use image::{GrayImage, RgbImage};
 
 use crate::score::{
     FlowProvider, FrameFusion, FusionParams, FusionWeights, Heatmap, HeatmapScratch, ObjectMaps,
-    ObjectScore, PixelReferenceMode, ScoreCache, ScoreSeries, ScoreTable, compose_heatmap,
-    reference_threshold,
+    ObjectScore, PixelReferenceMode, ScoreCache, ScoreError, ScoreSeries, ScoreTable,
+    compose_heatmap, reference_threshold,
 };
 use crate::sequence::{FlowField, FrameId, Scenario};
 
@@ -89,7 +89,7 @@ impl FrameScene {
             Some(heat)
         };
         let flow = match flows {
-            Some(provider) => provider.flow(index)?,
+            Some(provider) => provider.flow(index).map_err(ScoreError::from)?,
             None => None,
         };
         Ok(Self {

@@ -23,7 +23,7 @@ use crate::sequence::{FlowField, Scenario};
 
 use super::ScoreError;
 use super::cache::{ObjectScore, ScoreTable};
-use super::flows::FlowProvider;
+use crate::flow::FlowProvider;
 
 /// A baseline frame score.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]

@@ -44,17 +44,9 @@ pub enum ScoreError {
         #[source]
         source: ModelError,
     },
-    /// Optical flow could not be estimated for a frame pair.
-    #[error("{scenario}, flow into frame {frame}: {source}")]
-    Flow {
-        /// Scenario folder.
-        scenario: PathBuf,
-        /// Frame index the flow leads into.
-        frame: usize,
-        /// What the estimator said.
-        #[source]
-        source: FlowError,
-    },
+    /// A flow could not be read or estimated (the error names the scenario and frame).
+    #[error(transparent)]
+    Flow(#[from] FlowError),
     /// The model has no training statistics, so its scores cannot be z-scored.
     #[error(
         "model has no training statistics: scores cannot be normalised (compute them with `vadscope train` first)"

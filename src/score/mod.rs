@@ -10,7 +10,7 @@
 //!   detection files (read by `sequence::detections`: MOT, COCO, YOLO, `boxes.csv`) and the detector-free
 //!   motion boxes ([`motion`]); [`match_boxes`] / [`BoxMatchStats`] / [`match_scenario`] for
 //!   box IoU and recall against the ground truth.
-//! - [`FlowSource`] / [`FlowProvider`]: stored flows, or DIS estimates.
+//! - [`FlowSource`] / [`FlowProvider`] (from [`crate::flow`]): stored flows, or DIS estimates.
 //! - [`score_scenario`]: the scoring run (cubes by `model::stc`, progress callback,
 //!   cancellation flag) writing a [`ScoreCache`] at [`CacheKey::path_in`];
 //!   [`score_scenario_with`] / [`run_scoring`] take any cube source and model.
@@ -32,7 +32,6 @@ pub mod boxes;
 pub mod cache;
 mod error;
 pub mod evaluate;
-pub mod flows;
 pub mod fusion;
 pub mod motion;
 pub mod objects;
@@ -42,6 +41,7 @@ mod scorer;
 pub mod series;
 pub mod table;
 
+pub use crate::flow::{FlowProvider, FlowSource};
 pub use crate::sequence::detections::{DetectionFile, DetectionFormat, FrameNumbering};
 pub use baselines::{Baseline, baseline_frame_scores};
 pub use boxes::{
@@ -56,7 +56,6 @@ pub use evaluate::{
     EvalRow, FrameSeries, Grouping, SWEEP_VALUES, ScenarioScores, SweepRow, TopObjectHits,
     evaluate_dataset, evaluate_series, evaluate_table, sweep_grid, sweep_weights, top_object_hits,
 };
-pub use flows::{FlowProvider, FlowSource};
 pub use fusion::{
     FrameFusion, FrameMetricOptions, FusionWeights, Heatmap, HeatmapScratch, PixelReferenceMode,
     compose_heatmap, frame_scores, frame_scores_into, metric_frames,

@@ -29,7 +29,7 @@ use super::cache::{
     CacheKey, CacheWriter, FrameEntry, FrameState, ModelKey, ObjectMaps, ObjectScore,
     PixelReference, REFERENCE_BATCH, ScoreCache, ScoreMeta, ScoreTable, frame_ids_hash,
 };
-use super::flows::{FlowProvider, FlowSource};
+use crate::flow::{FlowProvider, FlowSource};
 
 /// The boxes of each frame.
 pub trait FrameBoxes {
@@ -221,7 +221,7 @@ impl CubeSource for ScenarioCubes<'_> {
             boxes,
             self.geometry,
             &mut |k| scenario.rgb(k).map_err(|e| keep(e.into())),
-            &mut |k| flows.flow(k).map_err(keep),
+            &mut |k| flows.flow(k).map_err(|e| keep(e.into())),
         );
         result.map_err(|source| {
             own_error.take().unwrap_or_else(|| ScoreError::Model {

@@ -2,7 +2,9 @@
 //! three stages on them.
 //!
 //! Cubes use the ground-truth boxes of each frame (`Scenario::boxes`) that the model's box
-//! filter keeps, and the flows the scenarios store; frames labelled anomalous and boxes
+//! filter keeps, and the flows of a [`FlowSource`]: the ones the scenarios store, or DIS
+//! estimates (the flow that data without stored flow is scored on, read from and written to
+//! each scenario's flow cache); frames labelled anomalous and boxes
 //! flagged anomalous are left out, so only normal behaviour is learnt. No cube comes from a
 //! frame before `clip_hist`: those cubes would repeat frame 0 and hold the zero flow stored
 //! there, a degenerate input scoring never weighs (its metrics skip those frames). Each
@@ -10,8 +12,9 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::model::stc::{CubeGeometry, scenario_cubes};
-use crate::model::{BoxFilter, ModelConfig};
+use crate::flow::{FlowProvider, FlowSource};
+use crate::model::stc::{CubeGeometry, cubes_at};
+use crate::model::{BoxFilter, ModelConfig, ModelError};
 use crate::sequence::{Scenario, discover_scenarios};
 
 use super::config::TrainConfig;
@@ -31,6 +34,8 @@ pub struct CubeExtraction {
     pub frame_stride: usize,
     /// Leave out frames labelled anomalous and boxes flagged anomalous.
     pub normal_only: bool,
+    /// Where the cubes' flows come from.
+    pub flow: FlowSource,
 }
 
 impl CubeExtraction {
@@ -41,6 +46,7 @@ impl CubeExtraction {
             box_filter: config.box_filter,
             frame_stride: 1,
             normal_only: true,
+            flow: FlowSource::Stored,
         }
     }
 }
@@ -83,6 +89,14 @@ fn add_scenario(
 ) -> Result<(), TrainError> {
     let labels = scenario.frame_labels();
     let first = extraction.geometry.clip_hist;
+    let mut flows = FlowProvider::new(scenario, extraction.flow);
+    // The cube builder speaks ModelError; every message names the scenario.
+    let root = scenario.root().display().to_string();
+    let cube_error = |e: &dyn std::fmt::Display| ModelError::Cube(e.to_string());
+    let named = |e: ModelError| match e {
+        ModelError::Cube(m) if !m.starts_with(&root) => ModelError::Cube(format!("{root}: {m}")),
+        other => other,
+    };
     for index in (first..scenario.len()).step_by(extraction.frame_stride.max(1)) {
         if extraction.normal_only && labels.is_anomalous(index) {
             continue;
@@ -94,7 +108,14 @@ fn add_scenario(
             .filter(|b| !(extraction.normal_only && b.anomalous))
             .collect();
         let boxes = extraction.box_filter.apply(boxes, scenario.resolution());
-        let cubes = scenario_cubes(scenario, index, &boxes, extraction.geometry)?;
+        let cubes = cubes_at(
+            index,
+            &boxes,
+            extraction.geometry,
+            &mut |k| scenario.rgb(k).map_err(|e| cube_error(&e)),
+            &mut |k| flows.flow(k).map_err(|e| cube_error(&e)),
+        )
+        .map_err(named)?;
         let width = scenario.resolution().0.max(1) as f32;
         for cube in cubes {
             let centre = 0.5 * (cube.bbox.x1 + cube.bbox.x2) / width;

@@ -379,3 +379,63 @@ fn bad_input_gives_a_clear_error() {
         assert!(help.contains(option), "--help lacks {option}:\n{help}");
     }
 }
+
+#[test]
+fn training_on_estimated_flow_needs_no_stored_flow_and_fills_the_flow_cache() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let generated = vadscope(&[
+        "generate",
+        "--out",
+        path(&data),
+        "--count",
+        "2",
+        "--kind",
+        "normal",
+        "--frames",
+        "10",
+        "--size",
+        "96x64",
+        "--seed",
+        "5",
+        "--omit",
+        "flow,depth",
+    ]);
+    assert!(generated.status.success(), "{}", text(&generated.stderr));
+    let model = tiny_model(dir.path());
+
+    // Stored flow is the default, and these scenarios have none: the error says so.
+    let stored = run(&tiny(
+        &data,
+        &dir.path().join("stored"),
+        Some(&model),
+        &["--epochs", "1"],
+    ));
+    assert!(!stored.status.success());
+    let message = text(&stored.stderr);
+    assert!(
+        message.contains("flow") && message.contains(path(&data)),
+        "{message}"
+    );
+
+    let estimated = run(&tiny(
+        &data,
+        &dir.path().join("dis"),
+        Some(&model),
+        &["--epochs", "1", "--flow", "dis:ultrafast"],
+    ));
+    assert!(
+        estimated.status.success(),
+        "{}\n{}",
+        text(&estimated.stderr),
+        text(&estimated.stdout)
+    );
+    let stdout = text(&estimated.stdout);
+    assert_eq!(validation_losses(&stdout, 1).len(), 1, "{stdout}");
+    // The estimates went to each scenario's flow cache, where scoring reads them.
+    for scenario in std::fs::read_dir(&data).unwrap() {
+        let cache = scenario.unwrap().path().join(".vadscope/flow/ultrafast");
+        let cached = std::fs::read_dir(&cache).map_or(0, |d| d.count());
+        assert!(cached > 0, "no cached flow in {}", cache.display());
+    }
+}

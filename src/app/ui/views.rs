@@ -13,7 +13,7 @@ use crate::render::{
     Caption, DashboardInput, FrameScene, FrameView, FrameViewOptions, PredViewInput, SceneObject,
     ScoreLabels, TimelineInput, draw_frame_view, natural_size, pred_view, roc_chart,
 };
-use crate::score::{FlowProvider, PixelReferenceMode};
+use crate::score::{FlowProvider, PixelReferenceMode, ScoreError};
 
 /// What the main view's image depends on: when this is unchanged, the texture is reused.
 #[derive(Debug, Clone, PartialEq)]
@@ -127,7 +127,7 @@ fn scene(state: &AppState, with_flow: bool) -> Result<Option<FrameScene>, AppErr
     }
     let frame = scenario.rgb(index)?;
     let flow = match flows.as_mut() {
-        Some(provider) => provider.flow(index)?,
+        Some(provider) => provider.flow(index).map_err(ScoreError::from)?,
         None => None,
     };
     let objects = scenario

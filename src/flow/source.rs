@@ -1,5 +1,5 @@
 //! Where the optical flow of the cubes comes from ([`FlowSource`]) and a per-frame reader of
-//! it ([`FlowProvider`]).
+//! it ([`FlowProvider`]): scoring and training cut their cubes from it.
 //!
 //! Stored flows are the scenario's `OPTICAL_FLOW` files ([`Scenario::flow`]). Estimated
 //! flows come from the scenario's DIS flow cache (`.vadscope/flow/<preset>/`, filled by
@@ -12,11 +12,10 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use crate::flow::cache::cached_or_estimated_flow;
-use crate::flow::{DisFlow, DisPreset, FlowField};
 use crate::sequence::Scenario;
 
-use super::ScoreError;
+use super::cache::cached_or_estimated_flow;
+use super::{DisFlow, DisPreset, FlowError, FlowField};
 
 /// Where the flows of the cubes come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -79,7 +78,7 @@ impl<'a> FlowProvider<'a> {
 
     /// The flow from frame `index − 1` to frame `index`; `None` at frame 0 when nothing is
     /// stored there (there is no previous frame), and for stored flows that are missing.
-    pub fn flow(&mut self, index: usize) -> Result<Option<Arc<FlowField>>, ScoreError> {
+    pub fn flow(&mut self, index: usize) -> Result<Option<Arc<FlowField>>, FlowError> {
         if self.source != FlowSource::Stored
             && let Some(f) = self.estimates.get(&index)
         {
@@ -100,10 +99,10 @@ impl<'a> FlowProvider<'a> {
             return Ok(None);
         };
         let flow = cached_or_estimated_flow(self.scenario, preset, estimator, index).map_err(
-            |source| ScoreError::Flow {
+            |source| FlowError::Frame {
                 scenario: self.scenario.root().to_path_buf(),
-                frame: index,
-                source,
+                index,
+                source: Box::new(source),
             },
         )?;
         let flow = Arc::new(flow);
