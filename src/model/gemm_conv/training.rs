@@ -170,6 +170,8 @@ pub fn conv_transpose2d(
     apply(Layer::Transposed(geometry, out_padding), x, weight, bias)
 }
 
+/// `layer` on `x`: burn's own op inside [`with_burn_convolutions`], the plain lowering off
+/// the autodiff device, else the lowering registered as a node of the autodiff graph.
 fn apply(layer: Layer, x: Tensor<4>, weight: Tensor<4>, bias: Tensor<1>) -> Tensor<4> {
     if burn_convolutions() {
         return layer.burn_forward(x, weight, bias);
