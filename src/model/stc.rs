@@ -308,14 +308,19 @@ mod tests {
         assert!(err.to_string().contains("frame 3"), "{err}");
     }
 
-    #[test]
-    fn half_resolution_flow_is_cropped_on_its_grid_and_rescaled() {
+    /// A flow on a 32×24 grid (half the 64×48 frames) with u = 1, v = 2 everywhere.
+    fn half_resolution_flow() -> Arc<FlowField> {
         let mut small = FlowField::zeros(32, 24);
         for px in small.uv.chunks_mut(2) {
             px[0] = 1.0;
             px[1] = 2.0;
         }
-        let small = Arc::new(small);
+        Arc::new(small)
+    }
+
+    #[test]
+    fn half_resolution_flow_is_cropped_on_its_grid_and_rescaled() {
+        let small = half_resolution_flow();
         let cubes = cubes_at(
             4,
             &[bbox(8.0, 8.0, 40.0, 40.0)],
@@ -332,12 +337,7 @@ mod tests {
     #[test]
     fn patch_units_divide_the_motion_by_the_box_size() {
         // A 32×16 box into 8×8 patches: u × 8/32, v × 8/16, on top of the grid rescale.
-        let mut small = FlowField::zeros(32, 24);
-        for px in small.uv.chunks_mut(2) {
-            px[0] = 1.0;
-            px[1] = 2.0;
-        }
-        let small = Arc::new(small);
+        let small = half_resolution_flow();
         let geometry = CubeGeometry {
             patch_units: true,
             ..geometry(4, 8)
@@ -359,12 +359,7 @@ mod tests {
     fn frame_width_units_rescale_the_motion_to_the_reference_width() {
         // Frames 64 wide, flows rescaled to a 128-wide frame: u and v doubled, on top of the
         // grid rescale (a 32×24 flow grid for 64×48 frames).
-        let mut small = FlowField::zeros(32, 24);
-        for px in small.uv.chunks_mut(2) {
-            px[0] = 1.0;
-            px[1] = 2.0;
-        }
-        let small = Arc::new(small);
+        let small = half_resolution_flow();
         let geometry = CubeGeometry {
             frame_width: Some(128),
             ..geometry(4, 8)

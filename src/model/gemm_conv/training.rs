@@ -36,10 +36,11 @@ use burn::tensor::{Tensor, TensorData};
 use burn_flex::FlexTensor;
 use rayon::prelude::*;
 
-use super::{
-    Activation, ConvGeometry, CpuValues, GemmConv2d, GemmConvTranspose2d, channels_first, im2col,
-    matmul_accumulate_transposed, samples_per_tile, vectorised, with_scratch,
+use super::kernels::{
+    channels_first, im2col, matmul_accumulate_transposed, samples_per_tile, vectorised,
+    with_scratch,
 };
+use super::{Activation, ConvGeometry, CpuValues, GemmConv2d, GemmConvTranspose2d};
 
 /// burn's autodiff over its CPU backend, as the training device ([`Device::autodiff`] without
 /// gradient checkpointing) holds its tensors.

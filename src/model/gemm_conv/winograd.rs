@@ -12,7 +12,8 @@
 
 use rayon::prelude::*;
 
-use super::{Activation, activate_and_add, matmul, vectorised, with_scratch};
+use super::Activation;
+use super::kernels::{activate_and_add, matmul, vectorised, with_scratch};
 
 /// Positions of the 4×4 transformed domain.
 const POSITIONS: usize = 16;
