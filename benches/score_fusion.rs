@@ -119,6 +119,7 @@ fn synthetic_table(frames: usize, per_frame: usize, seed: u64) -> (ScoreTable, V
                 flow_pixel: pixel(2.5, 1.0, 5.0),
                 frame_pixel: pixel(1.5e-3, 5e-4, 3e-3),
                 bands: Vec::new(),
+                tails: None,
             },
             scenario_pixels: PixelReference {
                 flow: robust(2.5),

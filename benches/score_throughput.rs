@@ -60,6 +60,7 @@ fn compact_detector() -> Detector {
             flow_pixel: pixel(0.1),
             frame_pixel: pixel(0.01),
             bands: Vec::new(),
+            tails: None,
         }),
         note: None,
     };

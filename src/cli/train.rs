@@ -9,7 +9,9 @@ use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use vadscope::flow::FlowSource;
-use vadscope::model::{BoxFilter, FlowUnits, ModelConfig, TrainingStats, read_checkpoint_meta};
+use vadscope::model::{
+    BoxFilter, FlowUnits, ModelConfig, ScoreScale, TrainingStats, read_checkpoint_meta,
+};
 use vadscope::sequence::Scenario;
 use vadscope::train::scenarios::{
     CubeExtraction, TrainRequest, scenario_folders, train_from_scenarios,
@@ -135,6 +137,13 @@ pub struct TrainArgs {
     /// them for a trained model.
     #[arg(long, value_name = "N")]
     score_bands: Option<usize>,
+    /// How objects' S_r and S_p are normalised before the fusion weights: `z` (z-scores
+    /// with the training moments, the reference) or `tail` (the surprisal −ln P(S' ≥ S)
+    /// among the training cubes' scores, robust to S_r's heavy tail). Allowed with --init
+    /// like --score-bands: `--init RUN/model.safetensors --epochs 0 --score-scale tail`
+    /// re-derives the statistics of a trained model.
+    #[arg(long, value_enum)]
+    score_scale: Option<ScoreScaleArg>,
     /// Where the cubes' flows come from: `stored` (the scenarios' OPTICAL_FLOW, the
     /// default), `dis[:preset]` (estimated with DIS as scoring estimates the flow of data
     /// without stored flow, cached in each scenario's `.vadscope/flow/`), `auto[:preset]`
@@ -186,6 +195,13 @@ enum FlowUnitsArg {
     FrameWidth,
 }
 
+/// The score normalisations `--score-scale` can choose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ScoreScaleArg {
+    Z,
+    Tail,
+}
+
 /// The model presets `--preset` can choose.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum PresetArg {
@@ -228,6 +244,11 @@ fn with_model_options(mut model: ModelConfig, args: &TrainArgs) -> anyhow::Resul
     if let Some(bands) = args.score_bands {
         model.score_bands = bands;
     }
+    match args.score_scale {
+        Some(ScoreScaleArg::Z) => model.score_scale = ScoreScale::ZScore,
+        Some(ScoreScaleArg::Tail) => model.score_scale = ScoreScale::TailSurprisal,
+        None => {}
+    }
     model
         .validate()
         .context("the model options do not describe a usable model")?;
@@ -249,11 +270,13 @@ fn training_frame_width(data: &[PathBuf]) -> anyhow::Result<u32> {
 /// Refuses `--flow-units` with `--init` unless it only names the units the initial model's
 /// cubes already have: native pixels of frames as wide as the training data's.
 fn check_init_flow_units(initial: &ModelConfig, args: &TrainArgs) -> anyhow::Result<()> {
-    let Some(units) = args.flow_units else {
+    if args.flow_units.is_none() {
         return Ok(());
-    };
-    if units != FlowUnitsArg::FrameWidth
-        || initial.conventions.flow_units != FlowUnits::NativePixels
+    }
+    // Any width stands for the data's here: only the kind of units decides.
+    let frame_width = FlowUnits::FrameWidth { width: 1 };
+    if args.flow_units != Some(FlowUnitsArg::FrameWidth)
+        || !initial.conventions.flow_units.relabels_as(frame_width)
     {
         bail!(
             "--flow-units with --init only turns native-pixel flows into frame-width units \

@@ -67,6 +67,16 @@ pub enum FlowUnits {
 }
 
 impl FlowUnits {
+    /// Whether a model trained on flows in `self` may be continued as one in `to` without
+    /// retraining: only native pixels named frame-width units, which leaves the cubes of
+    /// frames as wide as the reference width as they were.
+    pub fn relabels_as(self, to: FlowUnits) -> bool {
+        matches!(
+            (self, to),
+            (FlowUnits::NativePixels, FlowUnits::FrameWidth { .. })
+        )
+    }
+
     /// The (u, v) factors that turn native-pixel flows into the model's units.
     pub fn factors(&self) -> [f32; 2] {
         match self {
@@ -153,6 +163,22 @@ pub struct ModelConfig {
     /// checkpoints) keeps one global z-score.
     #[serde(default = "one_band")]
     pub score_bands: usize,
+    /// How an object's S_r and S_p are made comparable before the fusion weights multiply
+    /// them ([`ScoreScale`]). Absent in older checkpoints, which z-score (the reference).
+    #[serde(default)]
+    pub score_scale: ScoreScale,
+}
+
+/// How an object's S_r and S_p are normalised before fusion.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ScoreScale {
+    /// (S − μ) / σ with the training moments (the reference).
+    #[default]
+    ZScore,
+    /// −ln P(S' ≥ S) over the training cubes' scores ([`super::score_tail`]): how rare an
+    /// error this large is among normal objects, robust to S_r's heavy tail.
+    TailSurprisal,
 }
 
 /// The reference's single, global score statistic.
@@ -184,6 +210,7 @@ impl ModelConfig {
             box_filter: BoxFilter::KEEP_ALL,
             joint_flows: false,
             score_bands: 1,
+            score_scale: ScoreScale::ZScore,
         }
     }
 
@@ -459,6 +486,7 @@ mod tests {
         };
         c.joint_flows = true;
         c.score_bands = 5;
+        c.score_scale = ScoreScale::TailSurprisal;
         let back: ModelConfig =
             serde_json::from_str(&serde_json::to_string(&c).expect("serialise")).expect("parse");
         assert_eq!(back, c);
@@ -468,11 +496,13 @@ mod tests {
         object.remove("box_filter");
         object.remove("joint_flows");
         object.remove("score_bands");
+        object.remove("score_scale");
         let old: ModelConfig = serde_json::from_value(old).expect("parse old");
         assert_eq!(old, ModelConfig::compact());
         assert_eq!(old.box_filter, BoxFilter::KEEP_ALL);
         assert!(!old.joint_flows);
         assert_eq!(old.score_bands, 1);
+        assert_eq!(old.score_scale, ScoreScale::ZScore);
         let mut bad = ModelConfig::compact();
         bad.score_bands = 0;
         assert!(bad.validate().is_err());

@@ -18,6 +18,7 @@ pub mod layers;
 pub mod losses;
 pub mod memae;
 pub mod rng;
+pub mod score_tail;
 pub mod stats;
 pub mod stc;
 pub mod vunet;
@@ -28,11 +29,14 @@ pub use bundled::{BUNDLED_MODEL_FILE, MODEL_ENV, bundled_model};
 pub use checkpoint::{
     Checkpoint, CheckpointMeta, load_checkpoint, read_checkpoint_meta, save_checkpoint,
 };
-pub use config::{ColorOrder, FlowUnits, InputConventions, ModelConfig, SkipOp};
+pub use config::{ColorOrder, FlowUnits, InputConventions, ModelConfig, ScoreScale, SkipOp};
 pub use error::ModelError;
 pub use hf2vad::{Hf2Vad, Hf2VadOutput};
 pub use inference::{CubeResult, Detector, InferenceLatents};
 pub use memae::{MemAeOutput, MlMemAeSc};
 pub use rng::NoiseRng;
-pub use stats::{BandStats, PixelStats, ScoreStats, StatsAccumulator, TrainingStats, band_of};
+pub use score_tail::TailTable;
+pub use stats::{
+    BandStats, PixelStats, ScoreStats, ScoreTails, StatsAccumulator, TrainingStats, band_of,
+};
 pub use vunet::{Latents, Vunet, VunetOutput};

@@ -6,11 +6,14 @@
 //! ([`TrainingStats::bands`], by the box centre's column): objects beside the road (parked
 //! and oncoming cars) have much larger flow errors in normal driving than the car ahead, so
 //! one global z-score lets them set every normal frame's score; a z-score against the
-//! objects of the same band asks "unusual *for an object there*" instead.
+//! objects of the same band asks "unusual *for an object there*" instead. The scores can
+//! also be kept as tail tables ([`ScoreTails`], [`super::score_tail`]), which score an
+//! object by how rare its error is among the training cubes instead of by its z-score.
 
 use serde::{Deserialize, Serialize};
 
 use super::rng::NoiseRng;
+use super::score_tail::TailTable;
 
 /// Mean and population standard deviation (ddof 0) of one score: the same statistic the
 /// evaluation z-scores with, so both share one definition.
@@ -34,8 +37,27 @@ pub struct PixelStats {
     pub total: u64,
 }
 
+/// Tail tables of S_r and S_p over a set of training cubes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ScoreTails {
+    /// S_r's table.
+    pub flow: TailTable,
+    /// S_p's table.
+    pub frame: TailTable,
+}
+
+impl ScoreTails {
+    /// The tables of paired S_r and S_p values; `None` for none (or a non-finite one).
+    pub fn of(flow_scores: &[f64], frame_scores: &[f64]) -> Option<Self> {
+        Some(Self {
+            flow: TailTable::of(flow_scores)?,
+            frame: TailTable::of(frame_scores)?,
+        })
+    }
+}
+
 /// S_r and S_p moments of the training cubes whose box centre lies in one band.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BandStats {
     /// Training cubes in the band.
     pub cubes: u64,
@@ -43,6 +65,9 @@ pub struct BandStats {
     pub flow_score: ScoreStats,
     /// S_p of those cubes.
     pub frame_score: ScoreStats,
+    /// Tail tables of those cubes' scores, when the model scores by tail surprisal.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tails: Option<ScoreTails>,
 }
 
 /// The band (of `bands` equal vertical bands of the image) holding a box centre at
@@ -70,18 +95,44 @@ pub struct TrainingStats {
     /// [`MIN_BAND_CUBES`] training cubes keeps the global moments.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub bands: Vec<BandStats>,
+    /// Tail tables of all training cubes' scores (`None`: objects are z-scored, as in the
+    /// reference). When present, every band with its own moments has its own tables too.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tails: Option<ScoreTails>,
 }
 
 /// Fewest training cubes a band needs for moments of its own.
 pub const MIN_BAND_CUBES: u64 = 30;
 
 impl TrainingStats {
+    /// The band of an object whose box centre lies at `centre_x` (a fraction of the frame
+    /// width), if the model has bands and that one has enough cubes for its own statistics.
+    pub fn band_at(&self, centre_x: f32) -> Option<&BandStats> {
+        self.bands
+            .get(band_of(centre_x, self.bands.len()))
+            .filter(|band| band.cubes >= MIN_BAND_CUBES)
+    }
+
     /// The (S_r, S_p) moments that z-score an object whose box centre lies at `centre_x`
     /// (a fraction of the frame width): its band's, or the global ones.
     pub fn moments_at(&self, centre_x: f32) -> (&ScoreStats, &ScoreStats) {
-        match self.bands.get(band_of(centre_x, self.bands.len())) {
-            Some(band) if band.cubes >= MIN_BAND_CUBES => (&band.flow_score, &band.frame_score),
-            _ => (&self.flow_score, &self.frame_score),
+        match self.band_at(centre_x) {
+            Some(band) => (&band.flow_score, &band.frame_score),
+            None => (&self.flow_score, &self.frame_score),
+        }
+    }
+
+    /// The normalised (S_r, S_p) of an object whose box centre lies at `centre_x`, what
+    /// the fusion weights multiply: their tail surprisals when the model keeps tail tables,
+    /// else their z-scores; against the object's band when it has its own statistics.
+    pub fn normalise_at(&self, centre_x: f32, s_r: f64, s_p: f64) -> (f64, f64) {
+        let (moments, tails) = match self.band_at(centre_x) {
+            Some(band) => ((&band.flow_score, &band.frame_score), band.tails.as_ref()),
+            None => ((&self.flow_score, &self.frame_score), self.tails.as_ref()),
+        };
+        match tails {
+            Some(tails) => (tails.flow.surprisal(s_r), tails.frame.surprisal(s_p)),
+            None => (moments.0.z(s_r), moments.1.z(s_p)),
         }
     }
 }
@@ -134,7 +185,7 @@ impl Reservoir {
 }
 
 /// Quantile `p` of sorted `values` with numpy's default "linear" interpolation; 0 if empty.
-pub fn quantile_sorted(values: &[f32], p: f64) -> f64 {
+pub fn quantile_sorted<T: Copy + Into<f64>>(values: &[T], p: f64) -> f64 {
     if values.is_empty() {
         return 0.0;
     }
@@ -142,7 +193,8 @@ pub fn quantile_sorted(values: &[f32], p: f64) -> f64 {
     let lo = pos.floor() as usize;
     let hi = pos.ceil() as usize;
     let frac = pos - lo as f64;
-    values[lo] as f64 + (values[hi] as f64 - values[lo] as f64) * frac
+    let (lo, hi) = (values[lo].into(), values[hi].into());
+    lo + (hi - lo) * frac
 }
 
 /// Accumulates [`TrainingStats`] over batches of model outputs.
@@ -154,6 +206,8 @@ pub struct StatsAccumulator {
     /// Band of each pushed cube (empty without bands).
     cube_bands: Vec<usize>,
     bands: usize,
+    /// Whether [`Self::finish`] also builds tail tables.
+    tails: bool,
     flow_pixels: Reservoir,
     frame_pixels: Reservoir,
     rng: NoiseRng,
@@ -169,6 +223,7 @@ impl StatsAccumulator {
             frame_scores: Vec::new(),
             cube_bands: Vec::new(),
             bands: 1,
+            tails: false,
             flow_pixels: Reservoir::new(pixel_sample),
             frame_pixels: Reservoir::new(pixel_sample),
             rng: NoiseRng::new(seed),
@@ -179,6 +234,12 @@ impl StatsAccumulator {
     /// the global moments); cubes then go in with [`Self::push_at`].
     pub fn with_bands(mut self, bands: usize) -> Self {
         self.bands = bands.max(1);
+        self
+    }
+
+    /// Also keeps tail tables of the scores ([`ScoreTails`]), globally and per band.
+    pub fn with_tails(mut self, tails: bool) -> Self {
+        self.tails = tails;
         self
     }
 
@@ -226,11 +287,12 @@ impl StatsAccumulator {
                             .map(|(s, _)| *s)
                             .collect()
                     };
-                    let flow = pick(&self.flow_scores);
+                    let (flow, frame) = (pick(&self.flow_scores), pick(&self.frame_scores));
                     BandStats {
                         cubes: flow.len() as u64,
                         flow_score: moments(&flow),
-                        frame_score: moments(&pick(&self.frame_scores)),
+                        frame_score: moments(&frame),
+                        tails: self.tails.then(|| ScoreTails::of(&flow, &frame)).flatten(),
                     }
                 })
                 .collect()
@@ -244,6 +306,10 @@ impl StatsAccumulator {
             flow_pixel: self.flow_pixels.stats(),
             frame_pixel: self.frame_pixels.stats(),
             bands,
+            tails: self
+                .tails
+                .then(|| ScoreTails::of(&self.flow_scores, &self.frame_scores))
+                .flatten(),
         }
     }
 }

@@ -6,7 +6,9 @@
 //! s = w_r·(S_r − μ_r)/σ_r + w_p·(S_p − μ_p)/σ_p with the model's training statistics; a
 //! frame scores the maximum over its objects, a frame without objects the score of a
 //! zero-error object, w_r·(−μ_r/σ_r) + w_p·(−μ_p/σ_p). A zero σ contributes 0 (see
-//! [`crate::model::ScoreStats::z`]). For metrics, the first `clip_hist` frames of a
+//! [`crate::model::ScoreStats::z`]). A model that keeps tail tables
+//! ([`crate::model::ScoreScale::TailSurprisal`]) replaces each z-score by the tail surprisal
+//! of the error among the training cubes, s = w_r·t_r(S_r) + w_p·t_p(S_p). For metrics, the first `clip_hist` frames of a
 //! scenario are dropped and the rest median-filtered ([`metric_frames`]).
 //!
 //! **Pixel heatmaps** (spec §7.2, Part A.6): per object,
@@ -25,7 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::box_crop;
 use crate::eval::{RobustStats, median_filter};
-use crate::model::{ScoreStats, TrainingStats, band_of};
+use crate::model::{ScoreStats, ScoreTails, TrainingStats, band_of};
 
 use super::ScoreError;
 use super::cache::{ObjectMaps, ObjectScore, PixelReference, ScoreTable};
@@ -99,14 +101,58 @@ impl Affine {
     }
 }
 
-/// The object score `w_r·z(S_r) + w_p·z(S_p)`: an affine function of (S_r, S_p), z-scored
-/// with the training moments of the object's band of the image when the model has them
-/// ([`TrainingStats::bands`]), else with the global ones.
+/// The weighted sum of tail surprisals w_r·t_r(S_r) + w_p·t_p(S_p).
+#[derive(Debug, Clone, PartialEq)]
+struct TailSum {
+    tails: ScoreTails,
+    w_r: f64,
+    w_p: f64,
+}
+
+/// One set of training statistics as a map (S_r, S_p) ↦ object score.
+#[derive(Debug, Clone, PartialEq)]
+enum ObjectMap {
+    /// z-scores: affine in (S_r, S_p).
+    Affine(Affine),
+    /// Tail surprisals.
+    Tail(TailSum),
+}
+
+impl ObjectMap {
+    fn new(
+        flow: &ScoreStats,
+        frame: &ScoreStats,
+        tails: Option<&ScoreTails>,
+        weights: &FusionWeights,
+    ) -> Self {
+        match tails {
+            Some(tails) => Self::Tail(TailSum {
+                tails: tails.clone(),
+                w_r: weights.w_r,
+                w_p: weights.w_p,
+            }),
+            None => Self::Affine(Affine::new(flow, frame, weights)),
+        }
+    }
+
+    fn score(&self, s_r: f64, s_p: f64) -> f64 {
+        match self {
+            Self::Affine(map) => map.a_r * s_r + map.a_p * s_p + map.c,
+            Self::Tail(sum) => {
+                sum.w_r * sum.tails.flow.surprisal(s_r) + sum.w_p * sum.tails.frame.surprisal(s_p)
+            }
+        }
+    }
+}
+
+/// The object score `w_r·z(S_r) + w_p·z(S_p)` (or the tail surprisals' sum, for a model
+/// that keeps tail tables), with the training statistics of the object's band of the image
+/// when the model has them ([`TrainingStats::bands`]), else with the global ones.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameFusion {
-    global: Affine,
+    global: ObjectMap,
     /// One map per band, left to right (empty without bands).
-    bands: Vec<Affine>,
+    bands: Vec<ObjectMap>,
     frame_width: u32,
 }
 
@@ -114,15 +160,26 @@ impl FrameFusion {
     /// The fusion of `weights` under the model's training statistics, for frames
     /// `frame_width` pixels wide.
     pub fn new(stats: &TrainingStats, weights: &FusionWeights, frame_width: u32) -> Self {
+        let global = ObjectMap::new(
+            &stats.flow_score,
+            &stats.frame_score,
+            stats.tails.as_ref(),
+            weights,
+        );
         let n = stats.bands.len();
         let bands = (0..n)
-            .map(|b| {
-                let (flow, frame) = stats.moments_at((b as f32 + 0.5) / n as f32);
-                Affine::new(flow, frame, weights)
+            .map(|b| match stats.band_at((b as f32 + 0.5) / n as f32) {
+                Some(band) => ObjectMap::new(
+                    &band.flow_score,
+                    &band.frame_score,
+                    band.tails.as_ref(),
+                    weights,
+                ),
+                None => global.clone(),
             })
             .collect();
         Self {
-            global: Affine::new(&stats.flow_score, &stats.frame_score, weights),
+            global,
             bands,
             frame_width,
         }
@@ -141,7 +198,7 @@ impl FrameFusion {
             let centre = object.centre_fraction(self.frame_width);
             &self.bands[band_of(centre, self.bands.len())]
         };
-        map.a_r * f64::from(object.s_r) + map.a_p * f64::from(object.s_p) + map.c
+        map.score(f64::from(object.s_r), f64::from(object.s_p))
     }
 
     /// The index in `objects` of the object with the highest score (the last of equal ones),
@@ -153,9 +210,10 @@ impl FrameFusion {
         })
     }
 
-    /// The score of a frame without objects: a zero-error object under the global moments.
+    /// The score of a frame without objects: a zero-error object under the global
+    /// statistics.
     pub fn empty_frame_score(&self) -> f64 {
-        self.global.c
+        self.global.score(0.0, 0.0)
     }
 }
 

@@ -12,7 +12,7 @@ use burn::store::{BurnpackStore, ModuleSnapshot};
 use burn::tensor::Device;
 
 use crate::atomic_file::write_atomically_with;
-use crate::model::{FlowUnits, Hf2Vad, ModelConfig, load_checkpoint};
+use crate::model::{Hf2Vad, ModelConfig, load_checkpoint};
 
 use super::error::TrainError;
 
@@ -29,7 +29,7 @@ pub(super) fn best_file(stage: usize) -> String {
 }
 
 /// The model of the vadscope checkpoint `path`, which must have been made with `config`
-/// (up to the score bands, which only shape the statistics computed after training, and
+/// (up to the score bands and scale, which only shape the statistics computed after training, and
 /// native-pixel flows named frame-width units, which the caller vouches leave the cubes
 /// as they were).
 pub(super) fn initial_model(
@@ -40,12 +40,14 @@ pub(super) fn initial_model(
     let checkpoint = load_checkpoint(path, device)?;
     let mut same_network = ModelConfig {
         score_bands: config.score_bands,
+        score_scale: config.score_scale,
         ..checkpoint.meta.config.clone()
     };
-    if let (FlowUnits::NativePixels, FlowUnits::FrameWidth { .. }) = (
-        same_network.conventions.flow_units,
-        config.conventions.flow_units,
-    ) {
+    if same_network
+        .conventions
+        .flow_units
+        .relabels_as(config.conventions.flow_units)
+    {
         same_network.conventions.flow_units = config.conventions.flow_units;
     }
     if same_network != *config {

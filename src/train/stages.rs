@@ -25,7 +25,7 @@ use crate::model::inference::to_model_conventions;
 use crate::model::layers::tensor;
 use crate::model::losses::{stage1_loss, stage2_loss, stage3_loss};
 use crate::model::{
-    CheckpointMeta, Detector, Hf2Vad, Latents, ModelConfig, NoiseRng, StatsAccumulator,
+    CheckpointMeta, Detector, Hf2Vad, Latents, ModelConfig, NoiseRng, ScoreScale, StatsAccumulator,
     TrainingStats, save_checkpoint,
 };
 
@@ -77,7 +77,7 @@ pub enum TrainEvent {
         best: bool,
     },
     /// The training statistics were computed.
-    StatsDone(TrainingStats),
+    StatsDone(Box<TrainingStats>),
 }
 
 /// Outcome of one stage.
@@ -250,7 +250,7 @@ fn run_training(
 
     let model = model.valid();
     let stats = ctx.training_statistics(&model)?;
-    on_event(&TrainEvent::StatsDone(stats.clone()));
+    on_event(&TrainEvent::StatsDone(Box::new(stats.clone())));
     let checkpoint = out_dir.join(FINAL);
     let note = format!(
         "trained by vadscope: seed {}, {} training / {} validation cubes",
@@ -545,7 +545,8 @@ impl Context<'_> {
             .with_max_batch(self.train_config.eval_batch);
         let bands = self.model_config.score_bands;
         let mut acc = StatsAccumulator::new(self.train_config.pixel_sample, self.train_config.seed)
-            .with_bands(bands);
+            .with_bands(bands)
+            .with_tails(self.model_config.score_scale == ScoreScale::TailSurprisal);
         for chunk in self.train_idx.chunks(self.train_config.eval_batch) {
             let (frames, flows) = self.data.gather(chunk);
             for (&i, cube) in chunk.iter().zip(detector.infer(&frames, &flows)?) {

@@ -87,6 +87,7 @@ fn tiny_checkpoint(dir: &Path) -> PathBuf {
             flow_pixel: pixel_stats(0.02, 0.05),
             frame_pixel: pixel_stats(0.01, 0.02),
             bands: Vec::new(),
+            tails: None,
         }),
         note: Some("render test: random weights".into()),
     };

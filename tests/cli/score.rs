@@ -72,6 +72,7 @@ fn tiny_checkpoint(dir: &Path) -> PathBuf {
             flow_pixel: pixel_stats(0.1, 0.02, 0.5),
             frame_pixel: pixel_stats(0.01, 0.002, 0.04),
             bands: Vec::new(),
+            tails: None,
         }),
         note: Some("random init for the CLI tests".into()),
     };

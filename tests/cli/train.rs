@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
 use burn::tensor::Device;
-use vadscope::model::{Detector, FlowUnits, ModelConfig, load_checkpoint};
+use vadscope::model::{Detector, FlowUnits, ModelConfig, ScoreScale, load_checkpoint};
 use vadscope::train::CubeSet;
 
 use crate::support::cli::{text, vadscope};
@@ -19,9 +19,9 @@ fn path(p: &Path) -> &str {
     p.to_str().expect("utf-8 temp path")
 }
 
-/// Two 10-frame 96×64 normal-driving scenarios in `dir`.
-fn generate(dir: &Path) {
-    let out = vadscope(&[
+/// Two 10-frame 96×64 normal-driving scenarios in `dir`, with `extra` generator options.
+fn generate(dir: &Path, extra: &[&str]) {
+    let mut args = vec![
         "generate",
         "--out",
         path(dir),
@@ -35,7 +35,9 @@ fn generate(dir: &Path) {
         "96x64",
         "--seed",
         "5",
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let out = vadscope(&args);
     assert!(out.status.success(), "generate: {}", text(&out.stderr));
 }
 
@@ -111,7 +113,7 @@ fn training_lowers_the_loss_and_writes_a_checkpoint_with_statistics() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
     let out = dir.path().join("run");
-    generate(&data);
+    generate(&data, &[]);
     let model = tiny_model(dir.path());
 
     let trained = run(&tiny(&data, &out, Some(&model), &["--epochs", "3"]));
@@ -142,14 +144,24 @@ fn training_lowers_the_loss_and_writes_a_checkpoint_with_statistics() {
     assert!(stats.flow_score.mean > 0.0 && stats.frame_score.std > 0.0);
     assert!(stats.frame_pixel.iqr >= 0.0 && stats.flow_pixel.total > 0);
 
-    // Score bands re-derived for the trained model: same weights, statistics per band.
+    // Score bands and tail tables re-derived for the trained model: same weights,
+    // statistics per band.
     let banded = dir.path().join("banded");
     let init = path(&trained_model).to_string();
     let rederived = run(&tiny(
         &data,
         &banded,
         None,
-        &["--init", &init, "--epochs", "0", "--score-bands", "3"],
+        &[
+            "--init",
+            &init,
+            "--epochs",
+            "0",
+            "--score-bands",
+            "3",
+            "--score-scale",
+            "tail",
+        ],
     ));
     assert!(rederived.status.success(), "{}", text(&rederived.stderr));
     let again_stdout = text(&rederived.stdout);
@@ -157,8 +169,19 @@ fn training_lowers_the_loss_and_writes_a_checkpoint_with_statistics() {
     let banded = load_checkpoint(&banded.join("model.safetensors"), &Device::flex())
         .expect("banded checkpoint loads");
     assert_eq!(banded.meta.config.score_bands, 3);
+    assert_eq!(banded.meta.config.score_scale, ScoreScale::TailSurprisal);
     let banded_stats = banded.meta.stats.expect("statistics");
     assert_eq!(banded_stats.bands.len(), 3);
+    let tails = banded_stats.tails.as_ref().expect("tail tables");
+    assert!(tails.flow.surprisal(0.0) == 0.0 && tails.flow.surprisal(1e30) > 1.0);
+    for band in &banded_stats.bands {
+        assert_eq!(
+            band.tails.is_some(),
+            band.cubes > 0,
+            "tables where there are cubes"
+        );
+    }
+    assert!(stats.tails.is_none(), "the reference z-scores");
     assert_eq!(
         banded_stats.bands.iter().map(|b| b.cubes).sum::<u64>(),
         banded_stats.cubes,
@@ -225,7 +248,7 @@ fn an_interrupted_run_resumes_and_a_corrupt_checkpoint_is_reported() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
     let out = dir.path().join("run");
-    generate(&data);
+    generate(&data, &[]);
     let model = tiny_model(dir.path());
     let args = tiny(
         &data,
@@ -340,7 +363,7 @@ fn bad_input_gives_a_clear_error() {
     );
 
     let data = dir.path().join("data");
-    generate(&data);
+    generate(&data, &[]);
     let blocker = dir.path().join("a_file");
     std::fs::write(&blocker, b"x").unwrap();
     let unwritable = run(&tiny(&data, &blocker.join("run"), None, &["--epochs", "1"]));
@@ -384,24 +407,7 @@ fn bad_input_gives_a_clear_error() {
 fn training_on_estimated_flow_needs_no_stored_flow_and_fills_the_flow_cache() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
-    let generated = vadscope(&[
-        "generate",
-        "--out",
-        path(&data),
-        "--count",
-        "2",
-        "--kind",
-        "normal",
-        "--frames",
-        "10",
-        "--size",
-        "96x64",
-        "--seed",
-        "5",
-        "--omit",
-        "flow,depth",
-    ]);
-    assert!(generated.status.success(), "{}", text(&generated.stderr));
+    generate(&data, &["--omit", "flow,depth"]);
     let model = tiny_model(dir.path());
 
     // Stored flow is the default, and these scenarios have none: the error says so.

@@ -54,6 +54,7 @@ pub fn training_stats() -> TrainingStats {
         flow_pixel: pixel,
         frame_pixel: pixel,
         bands: Vec::new(),
+        tails: None,
     }
 }
 

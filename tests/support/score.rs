@@ -37,6 +37,7 @@ pub fn training_stats() -> TrainingStats {
         flow_pixel: pixel_stats(1.0, 0.5, 2.5),
         frame_pixel: pixel_stats(0.1, 0.0, 0.5),
         bands: Vec::new(),
+        tails: None,
     }
 }
 

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use crate::eval::RobustStats;
-use crate::model::{BandStats, PixelStats, ScoreStats, TrainingStats};
+use crate::model::{BandStats, PixelStats, ScoreStats, ScoreTails, TailTable, TrainingStats};
 use crate::sequence::FrameId;
 
 use super::super::ScoreError;
@@ -16,8 +16,8 @@ use super::table::{
 /// File magic.
 pub const MAGIC: &[u8; 8] = b"VADSCORE";
 /// Format version written and read by this vadscope (2: training statistics carry the
-/// per-band score moments).
-pub const VERSION: u32 = 2;
+/// per-band score moments; 3: and the tail tables of models that score by tail surprisal).
+pub const VERSION: u32 = 3;
 
 /// Bytes of the preamble.
 pub(super) const PREAMBLE_LEN: u64 = 64;
@@ -148,6 +148,16 @@ impl TableBytes {
         self.u64(p.sampled);
         self.u64(p.total);
     }
+    /// A presence byte, then S_r's and S_p's tables (level count, values, surprisals).
+    fn tails(&mut self, tails: Option<&ScoreTails>) {
+        self.u8(u8::from(tails.is_some()));
+        for table in tails.iter().flat_map(|t| [&t.flow, &t.frame]) {
+            self.u32(table.values.len() as u32);
+            for &v in table.values.iter().chain(&table.surprisal) {
+                self.f64(v);
+            }
+        }
+    }
 }
 
 /// Bounds-checked little-endian reader of the tables section.
@@ -225,6 +235,27 @@ impl<'a> TableReader<'a> {
             total: self.u64(what)?,
         })
     }
+    fn tail_table(&mut self, what: &str) -> Result<TailTable, ScoreError> {
+        let n = self.count(16, what)?;
+        let values = (0..n).map(|_| self.f64(what)).collect::<Result<_, _>>()?;
+        let surprisal = (0..n).map(|_| self.f64(what)).collect::<Result<_, _>>()?;
+        Ok(TailTable { values, surprisal })
+    }
+    fn tails(&mut self, what: &str) -> Result<Option<ScoreTails>, ScoreError> {
+        Ok(match self.u8(what)? {
+            0 => None,
+            1 => Some(ScoreTails {
+                flow: self.tail_table(what)?,
+                frame: self.tail_table(what)?,
+            }),
+            other => {
+                return Err(ScoreError::cache(
+                    self.path,
+                    format!("{what}: presence byte {other} is neither 0 nor 1"),
+                ));
+            }
+        })
+    }
     /// A count of records of `record_len` bytes that must still fit in the section.
     fn count(&mut self, record_len: usize, what: &str) -> Result<usize, ScoreError> {
         let n = self.u32(what)? as usize;
@@ -263,6 +294,10 @@ pub(super) fn encode_tables(table: &ScoreTable, checksums: &[u32]) -> Vec<u8> {
         t.u64(band.cubes);
         t.score_stats(&band.flow_score);
         t.score_stats(&band.frame_score);
+    }
+    t.tails(m.training.tails.as_ref());
+    for band in &m.training.bands {
+        t.tails(band.tails.as_ref());
     }
     t.robust(&m.scenario_pixels.flow);
     t.robust(&m.scenario_pixels.frame);
@@ -328,15 +363,20 @@ pub(super) fn decode_tables(
         (r.u64(what)?, r.score_stats(what)?, r.score_stats(what)?);
     let (flow_pixel, frame_pixel) = (r.pixel_stats(what)?, r.pixel_stats(what)?);
     let band_count = r.count(BAND_RECORD_LEN, "score bands")?;
-    let bands = (0..band_count)
+    let mut bands = (0..band_count)
         .map(|_| {
             Ok(BandStats {
                 cubes: r.u64("score bands")?,
                 flow_score: r.score_stats("score bands")?,
                 frame_score: r.score_stats("score bands")?,
+                tails: None,
             })
         })
         .collect::<Result<Vec<_>, ScoreError>>()?;
+    let tails = r.tails("tail tables")?;
+    for band in &mut bands {
+        band.tails = r.tails("tail tables of the score bands")?;
+    }
     let training = TrainingStats {
         cubes,
         flow_score,
@@ -344,6 +384,7 @@ pub(super) fn decode_tables(
         flow_pixel,
         frame_pixel,
         bands,
+        tails,
     };
     let scenario_pixels = PixelReference {
         flow: r.robust("scenario pixel statistics")?,

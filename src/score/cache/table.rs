@@ -82,11 +82,15 @@ impl ObjectScore {
         0.5 * (self.bbox[0] + self.bbox[2]) / frame_width.max(1) as f32
     }
 
-    /// z(S_r) and z(S_p) of the object under `stats`: against the training objects of its
-    /// band of the image when the model has bands, else the global moments.
+    /// z(S_r) and z(S_p) of the object under `stats` (their tail surprisals for a model
+    /// that keeps tail tables, [`TrainingStats::normalise_at`]): against the training
+    /// objects of its band of the image when the model has bands, else all of them.
     pub fn z_scores(&self, stats: &TrainingStats, frame_width: u32) -> (f64, f64) {
-        let (flow, frame) = stats.moments_at(self.centre_fraction(frame_width));
-        (flow.z(f64::from(self.s_r)), frame.z(f64::from(self.s_p)))
+        stats.normalise_at(
+            self.centre_fraction(frame_width),
+            f64::from(self.s_r),
+            f64::from(self.s_p),
+        )
     }
 
     /// The object's box as a [`BoxRecord`] of frame `frame` (not flagged anomalous).

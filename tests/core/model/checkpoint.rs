@@ -40,6 +40,7 @@ fn stats() -> TrainingStats {
             ..pixel
         },
         bands: Vec::new(),
+        tails: None,
     }
 }
 

@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use vadscope::model::{BandStats, ScoreStats, ScoreTails};
 use vadscope::score::cache::{frame_ids_hash, map_stride};
 use vadscope::score::{
     CacheKey, CacheWriter, ModelKey, ObjectMaps, ScoreCache, ScoreTable, write_cache,
@@ -74,6 +75,35 @@ fn tables_and_maps_round_trip() {
         1,
         "no temporary files stay behind: {leftovers:?}"
     );
+}
+
+#[test]
+fn score_bands_and_tail_tables_round_trip() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("banded.vsc");
+    let mut t = sample_table();
+    let tails = |scale: f64| {
+        let scores: Vec<f64> = (1..=50).map(|i| scale * f64::from(i).powi(3)).collect();
+        ScoreTails::of(&scores, &scores[..40]).expect("tables")
+    };
+    let band = |cubes, tails| BandStats {
+        cubes,
+        flow_score: ScoreStats {
+            mean: 2.5,
+            std: 0.125,
+        },
+        frame_score: ScoreStats {
+            mean: 1e-3,
+            std: 7.0,
+        },
+        tails,
+    };
+    let training = &mut t.meta.training;
+    training.tails = Some(tails(1.0));
+    training.bands = vec![band(40, Some(tails(0.5))), band(2, None)];
+    let maps: Vec<ObjectMaps> = (0..t.objects.len()).map(maps_of).collect();
+    write_cache(&path, &t, &maps).expect("write");
+    assert_eq!(ScoreCache::open(&path).expect("open").table(), &t);
 }
 
 #[test]

@@ -3,7 +3,7 @@
 //! per-batch mode and grids of other sizes.
 
 use vadscope::eval::median_filter;
-use vadscope::model::{BandStats, ScoreStats};
+use vadscope::model::{BandStats, ScoreStats, ScoreTails};
 use vadscope::score::{
     FrameFusion, FusionWeights, Heatmap, HeatmapScratch, ObjectMaps, PixelReferenceMode,
     compose_heatmap, frame_scores, metric_frames,
@@ -92,6 +92,7 @@ fn score_bands_z_score_each_object_against_the_training_objects_of_its_band() {
             mean: 1.0,
             std: 0.5,
         },
+        tails: None,
     };
     t.meta.training.bands = vec![band(500, 100.0, 50.0), band(3, 999.0, 1.0)];
     let w = weights(1.0, 0.0, 0.0, 0.0);
@@ -107,6 +108,44 @@ fn score_bands_z_score_each_object_against_the_training_objects_of_its_band() {
     assert!(close(frame_scores(&t, &w)[0], 2.0));
     t.meta.training.bands.clear();
     assert!(close(frame_scores(&t, &w)[0], 70.0), "(150 − 10) / 2");
+}
+
+#[test]
+fn tail_tables_score_objects_by_the_rarity_of_their_errors_in_their_band() {
+    // Left band: S_r of 1..=1000 (so 150 is at its 15th percentile); the global set, which
+    // the right band (too few cubes) falls back to: S_r of 1..=20.
+    let left = object([0.0, 0.0, 16.0, 8.0], 150.0, 0.0);
+    let right = object([40.0, 0.0, 56.0, 8.0], 14.0, 0.0);
+    let mut t = table(&[vec![left, right]], SIZE, 4, 128);
+    let range = |n: usize| (1..=n).map(|v| v as f64).collect::<Vec<_>>();
+    let tails = |n| ScoreTails::of(&range(n), &vec![1.0; n]).expect("tables");
+    let band = |cubes: u64, tails| BandStats {
+        cubes,
+        flow_score: ScoreStats {
+            mean: 0.0,
+            std: 1.0,
+        },
+        frame_score: ScoreStats {
+            mean: 0.0,
+            std: 1.0,
+        },
+        tails: Some(tails),
+    };
+    t.meta.training.bands = vec![band(1000, tails(1000)), band(3, tails(3))];
+    t.meta.training.tails = Some(tails(20));
+    let w = weights(2.0, 0.0, 0.0, 0.0);
+    let fusion = FrameFusion::of_table(&t, &w);
+    let (l, r) = (&t.objects[0], &t.objects[1]);
+    // −ln P(S ≥ s): 150 of 1..=1000 is exceeded by 85 %, 14 of 1..=20 by 30 %.
+    let (expected_l, expected_r) = (-(0.85f64.ln()), -(0.3158f64.ln()));
+    assert!((fusion.object_score(l) / 2.0 - expected_l).abs() < 0.01);
+    assert!((fusion.object_score(r) / 2.0 - expected_r).abs() < 0.03);
+    // The viewer's and the timeline's values read the same tables.
+    assert!((l.z_scores(&t.meta.training, SIZE.0).0 - expected_l).abs() < 0.01);
+    // The right object is the rarer, so it sets the frame's score; a frame without objects
+    // scores as one object without error: 0.
+    assert!(close(frame_scores(&t, &w)[0], fusion.object_score(r)));
+    assert!(close(fusion.empty_frame_score(), 0.0));
 }
 
 #[test]
