@@ -31,6 +31,7 @@ fn bench_timeline(c: &mut Criterion) {
         filtered: &filtered,
         z_r: &z,
         z_p: &z,
+        surprisals: false,
         truth: &truth,
         labels: &labels,
         threshold: Some(30.0),

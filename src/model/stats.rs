@@ -122,6 +122,12 @@ impl TrainingStats {
         }
     }
 
+    /// The letter the viewer names normalised scores with: `t` for tail surprisals, `z` for
+    /// z-scores.
+    pub fn component_symbol(&self) -> &'static str {
+        if self.tails.is_some() { "t" } else { "z" }
+    }
+
     /// The normalised (S_r, S_p) of an object whose box centre lies at `centre_x`, what
     /// the fusion weights multiply: their tail surprisals when the model keeps tail tables,
     /// else their z-scores; against the object's band when it has its own statistics.

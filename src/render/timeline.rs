@@ -33,6 +33,9 @@ pub struct TimelineInput<'a> {
     pub z_r: &'a [f64],
     /// z-score of S_p (frame prediction) of each frame's top object (NaN = none).
     pub z_p: &'a [f64],
+    /// Whether `z_r` and `z_p` are tail surprisals (a model that scores by tail tables)
+    /// rather than z-scores; only the labels change.
+    pub surprisals: bool,
     /// Ground truth: anomalous frames.
     pub truth: &'a [bool],
     /// The analyst's labels (`None` = not labelled).
@@ -57,6 +60,7 @@ impl<'a> TimelineInput<'a> {
             filtered: &series.filtered,
             z_r: &series.z_r,
             z_p: &series.z_p,
+            surprisals: series.surprisals,
             truth: &series.truth,
             labels,
             threshold,
@@ -371,7 +375,11 @@ pub(crate) fn draw_timeline(
             &layout.components_y,
             comp_range,
             false,
-            "z-score",
+            if input.surprisals {
+                "surprisal"
+            } else {
+                "z-score"
+            },
         );
     }
     let lanes = layout.truth_y.start..layout.labels_y.end;
@@ -491,8 +499,13 @@ pub(crate) fn draw_timeline(
         items.push((FILTERED, "fused (median-filtered)"));
     }
     if has_components {
-        items.push((Z_R, "z(S_r) flow"));
-        items.push((Z_P, "z(S_p) frame"));
+        if input.surprisals {
+            items.push((Z_R, "t(S_r) flow"));
+            items.push((Z_P, "t(S_p) frame"));
+        } else {
+            items.push((Z_R, "z(S_r) flow"));
+            items.push((Z_P, "z(S_p) frame"));
+        }
     }
     items.push((TRUTH, "ground-truth anomaly"));
     if label_colors.contains(&Some(LABEL_ANOMALY)) {

@@ -39,6 +39,9 @@ pub struct ScoreSeries {
     pub z_r: Vec<f64>,
     /// z(S_p) of each frame's top object (NaN without objects).
     pub z_p: Vec<f64>,
+    /// Whether `z_r` and `z_p` are tail surprisals: the model keeps tail tables
+    /// ([`crate::model::ScoreScale::TailSurprisal`]).
+    pub surprisals: bool,
     /// Index into [`ScoreTable::objects`] of each frame's top object.
     pub top_object: Vec<Option<usize>>,
     /// Ground truth per frame (false beyond the scenario's labels).
@@ -91,6 +94,7 @@ impl ScoreSeries {
             filtered,
             z_r,
             z_p,
+            surprisals: stats.tails.is_some(),
             top_object,
             truth,
             skip,

@@ -24,9 +24,10 @@ pub struct ObjectInfo {
     pub s_r: f32,
     /// Frame-prediction error S_p.
     pub s_p: f32,
-    /// z-score of S_r under the training statistics.
+    /// z-score of S_r under the training statistics (its tail surprisal for a model that
+    /// keeps tail tables, [`Self::component_symbol`]).
     pub z_r: f64,
-    /// z-score of S_p.
+    /// z-score (or tail surprisal) of S_p.
     pub z_p: f64,
     /// Fused object score w_r·z_r + w_p·z_p.
     pub score: f64,
@@ -62,6 +63,14 @@ impl AppState {
             raw: analysis.and_then(|a| a.series.fused.get(index).copied()),
             filtered: analysis.and_then(|a| a.series.filtered.get(index).copied()),
         }
+    }
+
+    /// The letter of the current scores' normalised S_r and S_p: `t` (tail surprisal) or
+    /// `z` (z-score, also without scores).
+    pub fn component_symbol(&self) -> &'static str {
+        self.entry()
+            .and_then(|e| e.scores())
+            .map_or("z", |s| s.table().meta.training.component_symbol())
     }
 
     /// The scored objects of the current frame.

@@ -40,14 +40,15 @@ impl InspectorPanel {
         }
         let selected = state.selected_track();
         let mut choose = None;
+        let symbol = state.component_symbol();
         egui::Grid::new("objects")
             .num_columns(4)
             .striped(true)
             .show(ui, |ui| {
                 ui.strong("track");
                 ui.strong("score");
-                ui.strong("z(S_r)");
-                ui.strong("z(S_p)");
+                ui.strong(format!("{symbol}(S_r)"));
+                ui.strong(format!("{symbol}(S_p)"));
                 ui.end_row();
                 for o in &objects {
                     if ui
@@ -73,7 +74,7 @@ impl InspectorPanel {
             return;
         };
         ui.monospace(format!(
-            "track #{}  class {}\nS_r {:.4}  z {:.2}\nS_p {:.5}  z {:.2}\nobject score {:.3}  (threshold {:.3})",
+            "track #{}  class {}\nS_r {:.4}  {symbol} {:.2}\nS_p {:.5}  {symbol} {:.2}\nobject score {:.3}  (threshold {:.3})",
             object.track_id,
             object.class,
             object.s_r,

@@ -136,9 +136,10 @@ impl MainView {
             state.apply(Action::SelectObject(object.map(|o| o.track_id)));
         }
         if let Some(o) = object {
+            let symbol = state.component_symbol();
             response.clone().on_hover_ui_at_pointer(|ui| {
                 ui.monospace(format!(
-                    "track {}  score {:.2}\nS_r {:.3} (z {:.2})  S_p {:.4} (z {:.2})",
+                    "track {}  score {:.2}\nS_r {:.3} ({symbol} {:.2})  S_p {:.4} ({symbol} {:.2})",
                     o.track_id, o.score, o.s_r, o.z_r, o.s_p, o.z_p
                 ));
             });

@@ -437,13 +437,14 @@ fn hover_text(state: &AppState, frame: usize) -> String {
     }
     if let Some(a) = state.current_analysis() {
         let s = &a.series;
+        let symbol = state.component_symbol();
         let value = |v: &[f64]| {
             v.get(frame)
                 .filter(|v| v.is_finite())
                 .map_or_else(|| "–".into(), |v| format!("{v:.3}"))
         };
         text.push_str(&format!(
-            "\nscore {} · filtered {} · threshold {:.3}\nz(S_r) {} · z(S_p) {}",
+            "\nscore {} · filtered {} · threshold {:.3}\n{symbol}(S_r) {} · {symbol}(S_p) {}",
             value(&s.fused),
             value(&s.filtered),
             state.threshold(),

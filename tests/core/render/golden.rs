@@ -130,6 +130,7 @@ fn timeline_and_roc_match_their_golden_images() {
         filtered: &s.filtered,
         z_r: &s.z_r,
         z_p: &s.z_p,
+        surprisals: false,
         truth: &s.truth,
         labels: &s.labels,
         threshold: Some(30.0),

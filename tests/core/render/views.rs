@@ -55,6 +55,7 @@ fn all_views(full: bool, size: (u32, u32)) -> Vec<RgbaImage> {
         filtered: &s.filtered,
         z_r: &s.z_r,
         z_p: &s.z_p,
+        surprisals: false,
         truth: &s.truth,
         labels: &s.labels,
         threshold: full.then_some(30.0),

@@ -6,7 +6,7 @@ use vadscope::eval::median_filter;
 use vadscope::model::{BandStats, ScoreStats, ScoreTails};
 use vadscope::score::{
     FrameFusion, FusionWeights, Heatmap, HeatmapScratch, ObjectMaps, PixelReferenceMode,
-    compose_heatmap, frame_scores, metric_frames,
+    ScoreSeries, compose_heatmap, frame_scores, metric_frames,
 };
 
 use crate::support::score::{constant_maps, object, table};
@@ -146,6 +146,15 @@ fn tail_tables_score_objects_by_the_rarity_of_their_errors_in_their_band() {
     // scores as one object without error: 0.
     assert!(close(frame_scores(&t, &w)[0], fusion.object_score(r)));
     assert!(close(fusion.empty_frame_score(), 0.0));
+    // The timeline's lanes carry the surprisals and say so.
+    let series = ScoreSeries::compute(&t, &[], &w, 1);
+    assert!(series.surprisals);
+    assert!((series.z_r[0] - expected_r).abs() < 0.03);
+    assert_eq!(t.meta.training.component_symbol(), "t");
+    t.meta.training.tails = None;
+    t.meta.training.bands.clear();
+    assert!(!ScoreSeries::compute(&t, &[], &w, 1).surprisals);
+    assert_eq!(t.meta.training.component_symbol(), "z");
 }
 
 #[test]
