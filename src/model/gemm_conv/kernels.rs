@@ -255,8 +255,14 @@ pub(super) unsafe fn matmul(
     }
 }
 
-/// `dst` [M, N] += `lhs` [M, K] · `rhs`ᵀ, with `rhs` stored row-major as [N, K]: the
-/// weight gradients' product of two unfolded operands that share their long axis K.
+/// `dst` [M, N] += `lhs` [M, K] · `rhs`ᵀ, with `rhs` stored row-major as [N, K] and `dst`
+/// stored column-major (as row-major [N, M]): the weight gradients' product of two unfolded
+/// operands that share their long axis K.
+///
+/// gemm computes a row-major product as its transpose, which makes the larger unfolded
+/// operand (`rhs`, N·K values) the one it packs; into a column-major `dst` it packs `lhs`
+/// (M·K) instead. For the layers' shapes that runs 1.5–2.7× faster (M 16–128, N 144–576,
+/// K 512–8192, one thread, gemm 0.19).
 ///
 /// # Safety
 /// `dst` must hold M·N values, `lhs` M·K and `rhs` N·K.
@@ -268,16 +274,17 @@ pub(super) unsafe fn matmul_accumulate_transposed(
     parallelism: gemm::Parallelism,
 ) {
     debug_assert!(dst.len() >= m * n && lhs.len() >= m * k && rhs.len() >= n * k);
-    // SAFETY: the caller guarantees the buffer sizes; `rhs` read with row stride 1 and
-    // column stride K is the [K, N] transpose of its row-major [N, K] values.
+    // SAFETY: the caller guarantees the buffer sizes; `dst` has column stride M and row
+    // stride 1; `rhs` read with row stride 1 and column stride K is the [K, N] transpose of
+    // its row-major [N, K] values.
     unsafe {
         gemm::gemm(
             m,
             n,
             k,
             dst.as_mut_ptr(),
+            m as isize,
             1,
-            n as isize,
             true,
             lhs.as_ptr(),
             1,

@@ -315,14 +315,16 @@ fn weight_gradient(left: &Tensor<4>, right: &Tensor<4>, g: ConvGeometry) -> Vec<
                     );
                 },
             );
-            // SAFETY: `acc` holds C_l·K values, `gathered` C_l·N and `cols` K·N.
+            // SAFETY: `acc` holds C_l·K values (column-major), `gathered` C_l·N and `cols`
+            // K·N.
             unsafe {
                 matmul_accumulate_transposed(acc, gathered, cols, [cl, cols_n, k], parallelism)
             };
         });
     };
     let len = cl * k;
-    if tiles >= 2 * rayon::current_num_threads() {
+    // The sums are column-major [C_l, K] (see `matmul_accumulate_transposed`).
+    let by_column = if tiles >= 2 * rayon::current_num_threads() {
         // One partial sum per tile, added in tile order: the same values whichever thread
         // ran which tile.
         let mut partials = vec![0.0f32; tiles * len];
@@ -342,7 +344,14 @@ fn weight_gradient(left: &Tensor<4>, right: &Tensor<4>, g: ConvGeometry) -> Vec<
             tile_product(tile, &mut acc, gemm::Parallelism::Rayon(0));
         }
         acc
+    };
+    let mut gradient = vec![0.0f32; len];
+    for (column, values) in by_column.chunks_exact(cl).enumerate() {
+        for (row, &v) in values.iter().enumerate() {
+            gradient[row * k + column] = v;
+        }
     }
+    gradient
 }
 
 #[cfg(test)]
