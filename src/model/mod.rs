@@ -37,6 +37,7 @@ pub use memae::{MemAeOutput, MlMemAeSc};
 pub use rng::NoiseRng;
 pub use score_tail::TailTable;
 pub use stats::{
-    BandStats, PixelStats, ScoreStats, ScoreTails, StatsAccumulator, TrainingStats, band_of,
+    BandStats, ObjectStatistics, PixelStats, ScoreStats, ScoreTails, StatsAccumulator,
+    TrainingStats, band_of,
 };
 pub use vunet::{Latents, Vunet, VunetOutput};

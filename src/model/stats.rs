@@ -54,6 +54,11 @@ impl ScoreTails {
             frame: TailTable::of(frame_scores)?,
         })
     }
+
+    /// The tail surprisals of S_r and S_p.
+    pub fn surprisals(&self, s_r: f64, s_p: f64) -> (f64, f64) {
+        (self.flow.surprisal(s_r), self.frame.surprisal(s_p))
+    }
 }
 
 /// S_r and S_p moments of the training cubes whose box centre lies in one band.
@@ -113,12 +118,25 @@ impl TrainingStats {
             .filter(|band| band.cubes >= MIN_BAND_CUBES)
     }
 
-    /// The (S_r, S_p) moments that z-score an object whose box centre lies at `centre_x`
-    /// (a fraction of the frame width): its band's, or the global ones.
-    pub fn moments_at(&self, centre_x: f32) -> (&ScoreStats, &ScoreStats) {
+    /// The statistics of all training cubes.
+    pub fn global(&self) -> ObjectStatistics<'_> {
+        ObjectStatistics {
+            flow: &self.flow_score,
+            frame: &self.frame_score,
+            tails: self.tails.as_ref(),
+        }
+    }
+
+    /// The statistics that normalise an object whose box centre lies at `centre_x` (a
+    /// fraction of the frame width): its band's when it has its own, else the global ones.
+    pub fn statistics_at(&self, centre_x: f32) -> ObjectStatistics<'_> {
         match self.band_at(centre_x) {
-            Some(band) => (&band.flow_score, &band.frame_score),
-            None => (&self.flow_score, &self.frame_score),
+            Some(band) => ObjectStatistics {
+                flow: &band.flow_score,
+                frame: &band.frame_score,
+                tails: band.tails.as_ref(),
+            },
+            None => self.global(),
         }
     }
 
@@ -127,18 +145,28 @@ impl TrainingStats {
     pub fn component_symbol(&self) -> &'static str {
         if self.tails.is_some() { "t" } else { "z" }
     }
+}
 
-    /// The normalised (S_r, S_p) of an object whose box centre lies at `centre_x`, what
-    /// the fusion weights multiply: their tail surprisals when the model keeps tail tables,
-    /// else their z-scores; against the object's band when it has its own statistics.
-    pub fn normalise_at(&self, centre_x: f32, s_r: f64, s_p: f64) -> (f64, f64) {
-        let (moments, tails) = match self.band_at(centre_x) {
-            Some(band) => ((&band.flow_score, &band.frame_score), band.tails.as_ref()),
-            None => ((&self.flow_score, &self.frame_score), self.tails.as_ref()),
-        };
-        match tails {
-            Some(tails) => (tails.flow.surprisal(s_r), tails.frame.surprisal(s_p)),
-            None => (moments.0.z(s_r), moments.1.z(s_p)),
+/// The training statistics one object is normalised against (its band's or the global
+/// ones): S_r and S_p moments, and their tail tables when the model scores by tail
+/// surprisal.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObjectStatistics<'a> {
+    /// S_r moments.
+    pub flow: &'a ScoreStats,
+    /// S_p moments.
+    pub frame: &'a ScoreStats,
+    /// Tail tables of S_r and S_p, if kept.
+    pub tails: Option<&'a ScoreTails>,
+}
+
+impl ObjectStatistics<'_> {
+    /// The normalised (S_r, S_p), what the fusion weights multiply: their tail surprisals
+    /// when there are tail tables, else their z-scores.
+    pub fn normalise(&self, s_r: f64, s_p: f64) -> (f64, f64) {
+        match self.tails {
+            Some(tails) => tails.surprisals(s_r, s_p),
+            None => (self.flow.z(s_r), self.frame.z(s_p)),
         }
     }
 }
@@ -371,9 +399,9 @@ mod tests {
         assert!((s.bands[1].flow_score.mean - 20.0).abs() < 1e-12);
         assert!((s.bands[1].flow_score.std - (200.0f64 / 3.0).sqrt()).abs() < 1e-9);
         // The middle band has enough cubes for its own moments; the sparse ones fall back.
-        assert_eq!(s.moments_at(0.5).0, &s.bands[1].flow_score);
-        assert_eq!(s.moments_at(0.1).0, &s.flow_score);
-        assert_eq!(s.moments_at(0.9).0, &s.flow_score);
+        assert_eq!(s.statistics_at(0.5).flow, &s.bands[1].flow_score);
+        assert_eq!(s.statistics_at(0.1).flow, &s.flow_score);
+        assert_eq!(s.statistics_at(0.9).flow, &s.flow_score);
         assert_eq!(
             (band_of(-0.2, 3), band_of(0.34, 3), band_of(1.0, 3)),
             (0, 1, 2)

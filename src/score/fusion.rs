@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::box_crop;
 use crate::eval::{RobustStats, median_filter};
-use crate::model::{ScoreStats, ScoreTails, TrainingStats, band_of};
+use crate::model::{ObjectStatistics, ScoreStats, ScoreTails, TrainingStats, band_of};
 
 use super::ScoreError;
 use super::cache::{ObjectMaps, ObjectScore, PixelReference, ScoreTable};
@@ -119,19 +119,14 @@ enum ObjectMap {
 }
 
 impl ObjectMap {
-    fn new(
-        flow: &ScoreStats,
-        frame: &ScoreStats,
-        tails: Option<&ScoreTails>,
-        weights: &FusionWeights,
-    ) -> Self {
-        match tails {
+    fn new(statistics: ObjectStatistics<'_>, weights: &FusionWeights) -> Self {
+        match statistics.tails {
             Some(tails) => Self::Tail(TailSum {
                 tails: tails.clone(),
                 w_r: weights.w_r,
                 w_p: weights.w_p,
             }),
-            None => Self::Affine(Affine::new(flow, frame, weights)),
+            None => Self::Affine(Affine::new(statistics.flow, statistics.frame, weights)),
         }
     }
 
@@ -139,7 +134,8 @@ impl ObjectMap {
         match self {
             Self::Affine(map) => map.a_r * s_r + map.a_p * s_p + map.c,
             Self::Tail(sum) => {
-                sum.w_r * sum.tails.flow.surprisal(s_r) + sum.w_p * sum.tails.frame.surprisal(s_p)
+                let (t_r, t_p) = sum.tails.surprisals(s_r, s_p);
+                sum.w_r * t_r + sum.w_p * t_p
             }
         }
     }
@@ -160,26 +156,12 @@ impl FrameFusion {
     /// The fusion of `weights` under the model's training statistics, for frames
     /// `frame_width` pixels wide.
     pub fn new(stats: &TrainingStats, weights: &FusionWeights, frame_width: u32) -> Self {
-        let global = ObjectMap::new(
-            &stats.flow_score,
-            &stats.frame_score,
-            stats.tails.as_ref(),
-            weights,
-        );
         let n = stats.bands.len();
         let bands = (0..n)
-            .map(|b| match stats.band_at((b as f32 + 0.5) / n as f32) {
-                Some(band) => ObjectMap::new(
-                    &band.flow_score,
-                    &band.frame_score,
-                    band.tails.as_ref(),
-                    weights,
-                ),
-                None => global.clone(),
-            })
+            .map(|b| ObjectMap::new(stats.statistics_at((b as f32 + 0.5) / n as f32), weights))
             .collect();
         Self {
-            global,
+            global: ObjectMap::new(stats.global(), weights),
             bands,
             frame_width,
         }

@@ -29,9 +29,9 @@ pub(super) fn best_file(stage: usize) -> String {
 }
 
 /// The model of the vadscope checkpoint `path`, which must have been made with `config`
-/// (up to the score bands and scale, which only shape the statistics computed after training, and
-/// native-pixel flows named frame-width units, which the caller vouches leave the cubes
-/// as they were).
+/// (up to the score bands and scale, which only shape the statistics computed after
+/// training, and native-pixel flows named frame-width units, which the caller vouches leave
+/// the cubes as they were).
 pub(super) fn initial_model(
     path: &Path,
     config: &ModelConfig,

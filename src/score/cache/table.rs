@@ -77,20 +77,18 @@ pub struct ObjectScore {
 
 impl ObjectScore {
     /// The box centre's column as a fraction of a frame `frame_width` pixels wide (what
-    /// picks the object's score band, [`TrainingStats::moments_at`]).
+    /// picks the object's score band, [`TrainingStats::statistics_at`]).
     pub fn centre_fraction(&self, frame_width: u32) -> f32 {
         0.5 * (self.bbox[0] + self.bbox[2]) / frame_width.max(1) as f32
     }
 
     /// z(S_r) and z(S_p) of the object under `stats` (their tail surprisals for a model
-    /// that keeps tail tables, [`TrainingStats::normalise_at`]): against the training
-    /// objects of its band of the image when the model has bands, else all of them.
+    /// that keeps tail tables, [`crate::model::ObjectStatistics::normalise`]): against the
+    /// training objects of its band of the image when the model has bands, else all of them.
     pub fn z_scores(&self, stats: &TrainingStats, frame_width: u32) -> (f64, f64) {
-        stats.normalise_at(
-            self.centre_fraction(frame_width),
-            f64::from(self.s_r),
-            f64::from(self.s_p),
-        )
+        stats
+            .statistics_at(self.centre_fraction(frame_width))
+            .normalise(f64::from(self.s_r), f64::from(self.s_p))
     }
 
     /// The object's box as a [`BoxRecord`] of frame `frame` (not flagged anomalous).
