@@ -92,6 +92,13 @@ impl Detector {
         self
     }
 
+    /// Replaces the training statistics the scores are normalised with (e.g. those of a
+    /// model still in training, measured on a sample of its cubes).
+    pub fn with_training_stats(mut self, stats: TrainingStats) -> Self {
+        self.meta.stats = Some(stats);
+        self
+    }
+
     /// The model config.
     pub fn config(&self) -> &ModelConfig {
         &self.meta.config

@@ -26,6 +26,9 @@
 //! - [`Baseline`] + [`baseline_frame_scores`]: trivial frame scores (flow energy, looming,
 //!   frame difference, the ego's deceleration) on the scored boxes, evaluated beside the
 //!   model by [`evaluate_series`].
+//! - [`ValidationSet`]: validation scenarios with anomalies, cut once, whose frame AUROC
+//!   judges a model in training (`vadscope train --select-on`; [`score_table`] scores in
+//!   memory).
 
 pub mod baselines;
 pub mod boxes;
@@ -40,6 +43,7 @@ pub mod run;
 mod scorer;
 pub mod series;
 pub mod table;
+pub mod validation;
 
 pub use crate::flow::{FlowProvider, FlowSource};
 pub use crate::sequence::detections::{DetectionFile, DetectionFormat, FrameNumbering};
@@ -65,8 +69,9 @@ pub use objects::{ObjectRow, object_rows, write_object_csv};
 pub use pixel_roc::{PixelRoc, add_scenario_pixels, add_scenario_pixels_each};
 pub use run::{
     CubeScorer, CubeSource, FrameBoxes, ScenarioCubes, ScoreProgress, ScoreRequest, ScoringPlan,
-    run_scoring, score_scenario, score_scenario_with,
+    run_scoring, score_scenario, score_scenario_with, score_table,
 };
 pub use scorer::Scorer;
 pub use series::{FusionParams, REFERENCE_THRESHOLD_SIGMA, ScoreSeries, reference_threshold};
 pub use table::{TableFormat, format_eval_table, render_eval_table, render_sweep_table};
+pub use validation::ValidationSet;

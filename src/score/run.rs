@@ -315,7 +315,8 @@ fn channel_mean(values: &[f32], channels: usize, area: usize) -> Vec<f32> {
 struct Run<'a> {
     plan: &'a ScoringPlan,
     scorer: &'a dyn CubeScorer,
-    writer: CacheWriter,
+    /// Where the per-object maps go; `None` when only the table is wanted.
+    writer: Option<CacheWriter>,
     patch: usize,
     clip_hist: usize,
     objects: Vec<ObjectScore>,
@@ -374,22 +375,24 @@ impl Run<'_> {
                     )),
                 });
             }
-            let maps = ObjectMaps {
-                flow_error: channel_mean(&r.flow_error, 2 * t, area),
-                frame_error: channel_mean(&r.frame_error, 3, area),
-                predicted: r
-                    .predicted_frame
-                    .iter()
-                    .map(|&v| (v * 255.0).round().clamp(0.0, 255.0) as u8)
-                    .collect(),
-                // Back to native pixels, so the view compares it with the stored flow.
-                recon_flow: r.recon_flows[2 * (t - 1) * area..]
-                    .chunks(area)
-                    .zip(cube.flow_scale)
-                    .flat_map(|(plane, scale)| plane.iter().map(move |v| v / scale))
-                    .collect(),
-            };
-            self.writer.push_maps(&maps)?;
+            if let Some(writer) = &mut self.writer {
+                let maps = ObjectMaps {
+                    flow_error: channel_mean(&r.flow_error, 2 * t, area),
+                    frame_error: channel_mean(&r.frame_error, 3, area),
+                    predicted: r
+                        .predicted_frame
+                        .iter()
+                        .map(|&v| (v * 255.0).round().clamp(0.0, 255.0) as u8)
+                        .collect(),
+                    // Back to native pixels, so the view compares it with the stored flow.
+                    recon_flow: r.recon_flows[2 * (t - 1) * area..]
+                        .chunks(area)
+                        .zip(cube.flow_scale)
+                        .flat_map(|(plane, scale)| plane.iter().map(move |v| v / scale))
+                        .collect(),
+                };
+                writer.push_maps(&maps)?;
+            }
             self.scenario_pixels
                 .push(r.s_r, r.s_p, &r.flow_error, &r.frame_error);
             self.batch.flow.extend_from_slice(&r.flow_error);
@@ -425,6 +428,36 @@ pub fn run_scoring(
     progress: &mut dyn FnMut(ScoreProgress),
     cancel: &AtomicBool,
 ) -> Result<ScoreCache, ScoreError> {
+    let (table, writer) = score_objects(plan, boxes, cubes, scorer, Some(path), progress, cancel)?;
+    let writer =
+        writer.ok_or_else(|| ScoreError::Invalid("the cache writer went missing".into()))?;
+    let written = writer.finish(&table)?;
+    ScoreCache::open(&written)
+}
+
+/// As [`run_scoring`], but in memory: the scalar table alone, no maps, no file. For
+/// callers that only need frame scores (model selection during training).
+pub fn score_table(
+    plan: &ScoringPlan,
+    boxes: &mut dyn FrameBoxes,
+    cubes: &mut dyn CubeSource,
+    scorer: &dyn CubeScorer,
+    cancel: &AtomicBool,
+) -> Result<ScoreTable, ScoreError> {
+    score_objects(plan, boxes, cubes, scorer, None, &mut |_| {}, cancel).map(|(table, _)| table)
+}
+
+/// The scoring run behind [`run_scoring`] and [`score_table`]: the table, and the writer
+/// holding the maps when `maps_path` is given (not yet finished).
+fn score_objects(
+    plan: &ScoringPlan,
+    boxes: &mut dyn FrameBoxes,
+    cubes: &mut dyn CubeSource,
+    scorer: &dyn CubeScorer,
+    maps_path: Option<&Path>,
+    progress: &mut dyn FnMut(ScoreProgress),
+    cancel: &AtomicBool,
+) -> Result<(ScoreTable, Option<CacheWriter>), ScoreError> {
     let training = scorer.training_stats().ok_or(ScoreError::NoTrainingStats)?;
     let box_filter = scorer.box_filter();
     let patch = scorer.patch_size();
@@ -440,7 +473,9 @@ pub fn run_scoring(
     let mut run = Run {
         plan,
         scorer,
-        writer: CacheWriter::create(path, patch)?,
+        writer: maps_path
+            .map(|path| CacheWriter::create(path, patch))
+            .transpose()?,
         patch,
         clip_hist,
         objects: Vec::new(),
@@ -534,13 +569,12 @@ pub fn run_scoring(
         objects: run.objects,
         batches: run.batches,
     };
-    let written = run.writer.finish(&table)?;
     progress(ScoreProgress {
         frames_done: total,
         frames_total: total,
         objects: table.objects.len(),
     });
-    ScoreCache::open(&written)
+    Ok((table, run.writer))
 }
 
 #[cfg(test)]

@@ -4,6 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::selection::AnomalySelection;
+
 use crate::model::losses::LossWeights;
 
 /// Learning-rate schedule over epochs.
@@ -79,6 +81,11 @@ pub struct TrainConfig {
     pub eval_batch: usize,
     /// At most this many values per error kind enter the pixel quantiles.
     pub pixel_sample: usize,
+    /// Keep each stage's epoch by an anomaly judge (validation scenarios with anomalies)
+    /// instead of the normal validation loss; `None` (the default, and the reference's
+    /// rule): the lowest normal validation loss.
+    #[serde(default)]
+    pub anomaly_selection: Option<AnomalySelection>,
 }
 
 impl Default for TrainConfig {
@@ -118,6 +125,7 @@ impl Default for TrainConfig {
             val_fraction: 0.1,
             eval_batch: 64,
             pixel_sample: 4_000_000,
+            anomaly_selection: None,
         }
     }
 }

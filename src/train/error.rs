@@ -32,6 +32,9 @@ pub enum TrainError {
     /// The training settings cannot be used.
     #[error("training config: {0}")]
     Config(String),
+    /// Model selection failed: the judge could not rate an epoch.
+    #[error("model selection: {0}")]
+    Selection(String),
 }
 
 impl From<crate::atomic_file::WriteError> for TrainError {

@@ -20,7 +20,9 @@ use crate::sequence::{Scenario, discover_scenarios};
 use super::config::TrainConfig;
 use super::cubes::CubeSet;
 use super::error::TrainError;
-use super::stages::{TrainEvent, TrainReport, train, train_from_checkpoint};
+use super::progress::{TrainEvent, TrainReport};
+use super::selection::EpochJudge;
+use super::stages::train_judged;
 
 /// How cubes are taken from scenarios.
 #[derive(Debug, Clone, PartialEq)]
@@ -146,9 +148,11 @@ pub struct TrainRequest {
 }
 
 /// Extracts (or loads) the cubes of `request.data` and trains on them; see
-/// [`train`](super::stages::train) for the stages, checkpoints and resume.
+/// [`train`](super::stages::train) for the stages, checkpoints and resume, and
+/// [`train_judged`] for `judge` (required exactly when `request.train` selects by one).
 pub fn train_from_scenarios(
     request: &TrainRequest,
+    judge: Option<&mut dyn EpochJudge>,
     on_event: &mut dyn FnMut(&TrainEvent),
     on_extract: &mut dyn FnMut(usize, usize),
 ) -> Result<TrainReport, TrainError> {
@@ -166,23 +170,15 @@ pub fn train_from_scenarios(
             set
         }
     };
-    match &request.initial {
-        Some(initial) => train_from_checkpoint(
-            initial,
-            &request.model,
-            &request.train,
-            &cubes,
-            &request.out_dir,
-            on_event,
-        ),
-        None => train(
-            &request.model,
-            &request.train,
-            &cubes,
-            &request.out_dir,
-            on_event,
-        ),
-    }
+    train_judged(
+        request.initial.as_deref(),
+        &request.model,
+        &request.train,
+        &cubes,
+        &request.out_dir,
+        judge,
+        on_event,
+    )
 }
 
 fn save_beside(path: &Path, set: &CubeSet) -> Result<(), TrainError> {

@@ -1,19 +1,19 @@
 //! The three training stages of HF²-VAD (spec §5) over a [`CubeSet`], with per-epoch
-//! checkpoints, resume, model selection on held-out normal cubes and the final training
-//! statistics.
+//! checkpoints, resume, model selection (on held-out normal cubes, or by an
+//! [`EpochJudge`], see [`super::selection`]) and the final training statistics.
 //!
 //! Output folder layout:
 //!
 //! | file | content |
 //! |---|---|
-//! | `state.json` | progress: stage, next epoch, best validation loss, RNG state, summaries |
+//! | `state.json` | progress: stage, next epoch, best selection value, RNG state, summaries |
 //! | `last_model.bpk`, `last_optim.bpk` | model and Adam state after the last finished epoch |
-//! | `stage{1,2,3}_best.bpk` | the model at the best validation epoch of each stage |
+//! | `stage{1,2,3}_best.bpk` | the model at the kept epoch of each stage |
 //! | `model.safetensors` | the final vadscope checkpoint (config, training statistics) |
 //!
 //! The model files are named and written in [`super::model_files`].
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use burn::module::Module;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
@@ -35,76 +35,8 @@ use super::error::TrainError;
 use super::model_files::{
     FINAL, LAST_MODEL, LAST_OPTIM, best_file, initial_model, load_model, save_model,
 };
-
-/// Progress reported to the caller.
-#[derive(Debug, Clone, PartialEq)]
-pub enum TrainEvent {
-    /// A stage begins (or resumes) at `first_epoch`.
-    StageStarted {
-        /// Stage number (1–3).
-        stage: usize,
-        /// First epoch that will run (0-based; > 0 after a resume).
-        first_epoch: usize,
-        /// Total epochs of the stage.
-        epochs: usize,
-        /// Optimiser steps per epoch.
-        steps_per_epoch: usize,
-    },
-    /// One optimiser step finished.
-    Step {
-        /// Stage number.
-        stage: usize,
-        /// Epoch (0-based).
-        epoch: usize,
-        /// Step within the epoch (0-based).
-        step: usize,
-        /// Total loss of the batch.
-        loss: f64,
-    },
-    /// An epoch finished and was checkpointed.
-    EpochDone {
-        /// Stage number.
-        stage: usize,
-        /// Epoch (0-based).
-        epoch: usize,
-        /// Mean training loss of the epoch.
-        train_loss: f64,
-        /// Mean validation loss (None without validation cubes).
-        val_loss: Option<f64>,
-        /// Learning rate used.
-        lr: f64,
-        /// Whether this epoch is the best of the stage so far.
-        best: bool,
-    },
-    /// The training statistics were computed.
-    StatsDone(Box<TrainingStats>),
-}
-
-/// Outcome of one stage.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct StageSummary {
-    /// Epochs run.
-    pub epochs: usize,
-    /// Epoch whose model was kept (0-based).
-    pub best_epoch: usize,
-    /// Its validation loss (training loss when there was no validation data).
-    pub best_loss: f64,
-    /// Mean training loss of the last epoch.
-    pub last_train_loss: f64,
-}
-
-/// Outcome of a whole training run.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TrainReport {
-    /// The final checkpoint (`model.safetensors` in the output folder).
-    pub checkpoint: PathBuf,
-    /// Training statistics stored in it.
-    pub stats: TrainingStats,
-    /// Per-stage outcomes (None for a stage with 0 epochs).
-    pub stages: [Option<StageSummary>; 3],
-    /// Cubes used for training and for validation.
-    pub split: (usize, usize),
-}
+use super::progress::{StageSummary, TrainEvent, TrainReport};
+use super::selection::{AnomalySelection, EpochJudge, evenly_spaced};
 
 /// Persistent progress of a run (`state.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -132,7 +64,15 @@ pub fn train(
     out_dir: &Path,
     on_event: &mut dyn FnMut(&TrainEvent),
 ) -> Result<TrainReport, TrainError> {
-    run_training(None, model_config, train_config, data, out_dir, on_event)
+    train_judged(
+        None,
+        model_config,
+        train_config,
+        data,
+        out_dir,
+        None,
+        on_event,
+    )
 }
 
 /// As [`train`], but the weights start from the vadscope checkpoint `initial` (whose config
@@ -146,26 +86,44 @@ pub fn train_from_checkpoint(
     out_dir: &Path,
     on_event: &mut dyn FnMut(&TrainEvent),
 ) -> Result<TrainReport, TrainError> {
-    run_training(
+    train_judged(
         Some(initial),
         model_config,
         train_config,
         data,
         out_dir,
+        None,
         on_event,
     )
 }
 
-fn run_training(
+/// As [`train`] (from `initial` when given, as [`train_from_checkpoint`]), with the
+/// `judge` that rates the judged epochs when `train_config.anomaly_selection` is set (it
+/// must be given then, and only then).
+pub fn train_judged(
     initial: Option<&Path>,
     model_config: &ModelConfig,
     train_config: &TrainConfig,
     data: &CubeSet,
     out_dir: &Path,
+    mut judge: Option<&mut dyn EpochJudge>,
     on_event: &mut dyn FnMut(&TrainEvent),
 ) -> Result<TrainReport, TrainError> {
     model_config.validate()?;
     check_inputs(model_config, train_config, data)?;
+    match (&train_config.anomaly_selection, &judge) {
+        (Some(_), None) => {
+            return Err(TrainError::Config(
+                "anomaly selection needs a judge (validation scenarios with anomalies)".into(),
+            ));
+        }
+        (None, Some(_)) => {
+            return Err(TrainError::Config(
+                "a judge was given but the training config selects on the validation loss".into(),
+            ));
+        }
+        _ => {}
+    }
     std::fs::create_dir_all(out_dir).map_err(|e| TrainError::io(out_dir, e))?;
     let (train_idx, val_idx) = data.split(train_config.val_fraction, train_config.seed);
     let device = Device::flex().autodiff();
@@ -234,7 +192,14 @@ fn run_training(
         }
         model = prepare_for_stage(model, stage);
         if settings.epochs > 0 {
-            model = ctx.run_stage(stage, model, &mut optim, &mut state, on_event)?;
+            model = ctx.run_stage(
+                stage,
+                model,
+                &mut optim,
+                &mut state,
+                judge.as_mut().map(|j| &mut **j as &mut dyn EpochJudge),
+                on_event,
+            )?;
         }
         // The next stage starts from this stage's best model (or carries on unchanged if the
         // stage was skipped).
@@ -249,7 +214,7 @@ fn run_training(
     }
 
     let model = model.valid();
-    let stats = ctx.training_statistics(&model)?;
+    let stats = ctx.training_statistics(&ctx.detector(model.clone())?, &train_idx)?;
     on_event(&TrainEvent::StatsDone(Box::new(stats.clone())));
     let checkpoint = out_dir.join(FINAL);
     let note = format!(
@@ -390,6 +355,7 @@ impl Context<'_> {
         mut model: Hf2Vad,
         optim: &mut ModuleOptimizer,
         state: &mut TrainState,
+        mut judge: Option<&mut dyn EpochJudge>,
         on_event: &mut dyn FnMut(&TrainEvent),
     ) -> Result<Hf2Vad, TrainError> {
         let settings = self.train_config.stage(stage);
@@ -430,10 +396,20 @@ impl Context<'_> {
             }
             let train_loss = loss_sum / seen.max(1) as f64;
             let val_loss = self.validation_loss(stage, &model);
-            let score = val_loss.unwrap_or(train_loss);
-            let best = state.best_loss.is_none_or(|b| score < b);
-            if best {
-                state.best_loss = Some(score);
+            let rating = match (self.train_config.anomaly_selection, judge.as_deref_mut()) {
+                (Some(selection), Some(judge)) if selection.judges(epoch, settings.epochs) => {
+                    Some(self.rate(&model, selection, judge)?)
+                }
+                _ => None,
+            };
+            // Lower is better; with anomaly selection only judged epochs are candidates.
+            let candidate = match self.train_config.anomaly_selection {
+                None => Some(val_loss.unwrap_or(train_loss)),
+                Some(_) => rating.map(|r| -r),
+            };
+            let best = candidate.is_some_and(|c| state.best_loss.is_none_or(|b| c < b));
+            if let Some(value) = candidate.filter(|_| best) {
+                state.best_loss = Some(value);
                 state.best_epoch = epoch;
                 save_model(&model, &self.out_dir.join(best_file(stage)))?;
             }
@@ -445,10 +421,12 @@ impl Context<'_> {
             })?;
             state.next_epoch = epoch + 1;
             state.rng_state = rng.state();
+            let best_loss = state.best_loss.unwrap_or(train_loss);
             state.summaries[stage - 1] = Some(StageSummary {
                 epochs: epoch + 1,
                 best_epoch: state.best_epoch,
-                best_loss: state.best_loss.unwrap_or(score),
+                best_loss,
+                best_rating: self.train_config.anomaly_selection.map(|_| -best_loss),
                 last_train_loss: train_loss,
             });
             write_state(self.out_dir, state)?;
@@ -457,6 +435,7 @@ impl Context<'_> {
                 epoch,
                 train_loss,
                 val_loss,
+                rating,
                 lr,
                 best,
             });
@@ -534,20 +513,53 @@ impl Context<'_> {
         Some(sum / self.val_idx.len() as f64)
     }
 
-    /// S_r/S_p moments and pixel-error quantiles of `model` over the training cubes.
-    fn training_statistics(&self, model: &Hf2Vad) -> Result<TrainingStats, TrainError> {
+    /// The rating `judge` gives the model of an epoch, scored with statistics over
+    /// `selection.stats_cubes` training cubes.
+    fn rate(
+        &self,
+        model: &Hf2Vad,
+        selection: AnomalySelection,
+        judge: &mut dyn EpochJudge,
+    ) -> Result<f64, TrainError> {
+        let detector = self.detector(model.valid())?;
+        let sample = evenly_spaced(self.train_idx, selection.stats_cubes.max(1));
+        let stats = self.training_statistics(&detector, &sample)?;
+        let detector = detector.with_training_stats(stats);
+        let rating = judge
+            .judge(&detector)
+            .map_err(|e| TrainError::Selection(format!("{}: {e}", judge.name())))?;
+        if !rating.is_finite() {
+            return Err(TrainError::Selection(format!(
+                "{} rated the model {rating}",
+                judge.name()
+            )));
+        }
+        Ok(rating)
+    }
+
+    /// `model` (in eval mode) as an inference detector, without training statistics.
+    fn detector(&self, model: Hf2Vad) -> Result<Detector, TrainError> {
         let meta = CheckpointMeta {
             config: self.model_config.clone(),
             stats: None,
             note: None,
         };
-        let detector = Detector::new(model.clone(), meta, &Device::flex())?
-            .with_max_batch(self.train_config.eval_batch);
+        Ok(Detector::new(model, meta, &Device::flex())?
+            .with_max_batch(self.train_config.eval_batch))
+    }
+
+    /// S_r/S_p moments and pixel-error quantiles of `detector` over the training cubes
+    /// `indices`.
+    fn training_statistics(
+        &self,
+        detector: &Detector,
+        indices: &[usize],
+    ) -> Result<TrainingStats, TrainError> {
         let bands = self.model_config.score_bands;
         let mut acc = StatsAccumulator::new(self.train_config.pixel_sample, self.train_config.seed)
             .with_bands(bands)
             .with_tails(self.model_config.score_scale == ScoreScale::TailSurprisal);
-        for chunk in self.train_idx.chunks(self.train_config.eval_batch) {
+        for chunk in indices.chunks(self.train_config.eval_batch) {
             let (frames, flows) = self.data.gather(chunk);
             for (&i, cube) in chunk.iter().zip(detector.infer(&frames, &flows)?) {
                 let centre = match self.data.centre_of(i) {

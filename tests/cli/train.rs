@@ -1,6 +1,7 @@
 //! `vadscope train` end to end on tiny generated scenarios: the validation loss falls, the
 //! final checkpoint loads with its training statistics, an interrupted run resumes, a single
-//! stage continues from an earlier run's checkpoint (`--init`), and bad
+//! stage continues from an earlier run's checkpoint (`--init`), `--select-on` keeps the epoch
+//! rated best on validation scenarios with anomalies, and bad
 //! input (no scenarios, an unwritable output folder, a corrupt checkpoint, a second run in a
 //! used folder) fails with a message that names the problem.
 
@@ -12,6 +13,7 @@ use burn::tensor::Device;
 use vadscope::model::{Detector, FlowUnits, ModelConfig, ScoreScale, load_checkpoint};
 use vadscope::train::CubeSet;
 
+use crate::support::app::generate_dataset;
 use crate::support::cli::{text, vadscope};
 use crate::support::model::tiny_config;
 
@@ -444,4 +446,84 @@ fn training_on_estimated_flow_needs_no_stored_flow_and_fills_the_flow_cache() {
         let cached = std::fs::read_dir(&cache).map_or(0, |d| d.count());
         assert!(cached > 0, "no cached flow in {}", cache.display());
     }
+}
+
+#[test]
+fn select_on_keeps_the_epoch_with_the_best_validation_auroc() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    generate(&data, &[]);
+    let validation = generate_dataset(&dir.path().join("validation"));
+    let model = tiny_model(dir.path());
+    let selected = |out: &str, extra: &[&str]| {
+        let mut args = vec!["--stage", "memae", "--epochs", "3", "--select-on"];
+        args.push(path(&validation));
+        args.extend_from_slice(extra);
+        run(&tiny(&data, &dir.path().join(out), Some(&model), &args))
+    };
+
+    let out = selected("every", &[]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{}\n{}", stdout, text(&out.stderr));
+    assert!(
+        stdout.contains("model selection: frame AUROC on 2 validation scenarios"),
+        "{stdout}"
+    );
+    let ratings: Vec<f64> = stdout
+        .lines()
+        .filter(|l| l.starts_with("stage 1 memae epoch"))
+        .filter_map(|l| {
+            l.split("validation frame AUROC ")
+                .nth(1)?
+                .split(' ')
+                .next()?
+                .parse()
+                .ok()
+        })
+        .collect();
+    assert_eq!(ratings.len(), 3, "every epoch judged:\n{stdout}");
+    let best = ratings.iter().copied().fold(f64::MIN, f64::max);
+    let first_best = ratings.iter().position(|&r| r == best).unwrap();
+    assert!(
+        stdout.contains(&format!(
+            "kept epoch {} (validation frame AUROC {best:.2} %)",
+            first_best + 1
+        )),
+        "{stdout}"
+    );
+
+    // Every second epoch and the last: epochs 2 and 3.
+    let out = selected("sparse", &["--select-every", "2"]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let judged: Vec<bool> = stdout
+        .lines()
+        .filter(|l| l.starts_with("stage 1 memae epoch"))
+        .map(|l| l.contains("validation frame AUROC"))
+        .collect();
+    assert_eq!(judged, vec![false, true, true], "{stdout}");
+
+    let zero = selected("zero", &["--select-every", "0"]);
+    assert!(!zero.status.success());
+    assert!(
+        text(&zero.stderr).contains("--select-every"),
+        "{}",
+        text(&zero.stderr)
+    );
+
+    // Normal driving alone cannot rate a detector.
+    let mut args = tiny(
+        &data,
+        &dir.path().join("normal"),
+        Some(&model),
+        &["--epochs", "1"],
+    );
+    args.extend(["--select-on".to_string(), path(&data).to_string()]);
+    let normal = run(&args);
+    assert!(!normal.status.success());
+    let message = text(&normal.stderr);
+    assert!(
+        message.contains("--select-on") && message.contains("0 anomalous"),
+        "{message}"
+    );
 }

@@ -48,6 +48,7 @@ mod score {
     mod flows;
     mod fusion;
     mod run;
+    mod validation;
 }
 
 mod sequence {

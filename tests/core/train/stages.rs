@@ -1,7 +1,7 @@
 //! The three training stages on a tiny model and synthetic cubes: losses fall, the final
 //! checkpoint reproduces the model's outputs, and an interrupted run resumes to exactly the
 //! result of an uninterrupted one; the lowered convolutions train the same loss curve as
-//! burn's own.
+//! burn's own; anomaly selection keeps the epoch its judge rates highest.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
@@ -9,7 +9,8 @@ use std::path::Path;
 use vadscope::model::gemm_conv::training::with_burn_convolutions;
 use vadscope::model::{Detector, ModelConfig, NoiseRng, read_checkpoint_meta};
 use vadscope::train::{
-    CubeSet, LrSchedule, StageConfig, TrainConfig, TrainEvent, TrainReport, train,
+    AnomalySelection, CubeSet, EpochJudge, LrSchedule, StageConfig, TrainConfig, TrainEvent,
+    TrainReport, train, train_judged,
 };
 
 use crate::support::model::tiny_config;
@@ -294,4 +295,141 @@ fn lowered_convolutions_train_the_same_loss_curve_as_burns() {
             );
         }
     }
+}
+
+/// A judge that hands out scripted ratings and records what it was shown.
+struct ScriptedJudge {
+    ratings: Vec<f64>,
+    /// Training cubes behind the statistics of each judged model.
+    stats_cubes: Vec<u64>,
+}
+
+impl EpochJudge for ScriptedJudge {
+    fn name(&self) -> &str {
+        "scripted judge"
+    }
+
+    fn judge(&mut self, detector: &Detector) -> Result<f64, String> {
+        let stats = detector.training_stats().ok_or("no statistics")?;
+        self.stats_cubes.push(stats.cubes);
+        self.ratings
+            .get(self.stats_cubes.len() - 1)
+            .copied()
+            .ok_or_else(|| "judged more often than scripted".to_string())
+    }
+}
+
+/// Stage 1 alone for `epochs`, its epochs chosen by `selection`.
+fn judged_training(epochs: usize, selection: AnomalySelection) -> TrainConfig {
+    let base = tiny_training(epochs);
+    TrainConfig {
+        stage2: StageConfig {
+            epochs: 0,
+            ..base.stage2.clone()
+        },
+        stage3: StageConfig {
+            epochs: 0,
+            ..base.stage3.clone()
+        },
+        anomaly_selection: Some(selection),
+        ..base
+    }
+}
+
+#[test]
+fn anomaly_selection_keeps_the_judged_epoch_rated_highest() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let config = judged_training(
+        5,
+        AnomalySelection {
+            every: 2,
+            stats_cubes: 5,
+        },
+    );
+    // Epochs 2, 4 and 5 (the last) are judged; the second judgement is the best.
+    let mut judge = ScriptedJudge {
+        ratings: vec![0.6, 0.8, 0.7],
+        stats_cubes: Vec::new(),
+    };
+    let mut events = Vec::new();
+    let report = train_judged(
+        None,
+        &tiny_config(ModelConfig::paper()),
+        &config,
+        &synthetic_cubes(),
+        dir.path(),
+        Some(&mut judge),
+        &mut |e| events.push(e.clone()),
+    )
+    .expect("training");
+    assert_eq!(
+        judge.stats_cubes,
+        vec![5, 5, 5],
+        "statistics over the sample"
+    );
+    let epochs: Vec<(usize, Option<f64>, bool)> = events
+        .iter()
+        .filter_map(|e| match e {
+            TrainEvent::EpochDone {
+                epoch,
+                rating,
+                best,
+                ..
+            } => Some((*epoch, *rating, *best)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(
+        epochs,
+        vec![
+            (0, None, false),
+            (1, Some(0.6), true),
+            (2, None, false),
+            (3, Some(0.8), true),
+            (4, Some(0.7), false),
+        ]
+    );
+    let summary = report.stages[0].clone().expect("stage 1 ran");
+    assert_eq!(summary.best_epoch, 3);
+    assert_eq!(summary.best_rating, Some(0.8));
+    // The final statistics are over all training cubes, not the sample.
+    assert_eq!(report.stats.cubes, 18);
+}
+
+#[test]
+fn anomaly_selection_without_a_judge_and_a_failing_judge_are_reported() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let model = tiny_config(ModelConfig::paper());
+    let config = judged_training(1, AnomalySelection::EVERY_EPOCH);
+    let err = train_judged(
+        None,
+        &model,
+        &config,
+        &synthetic_cubes(),
+        dir.path(),
+        None,
+        &mut |_| {},
+    )
+    .expect_err("no judge");
+    assert!(err.to_string().contains("needs a judge"), "{err}");
+
+    let mut judge = ScriptedJudge {
+        ratings: Vec::new(),
+        stats_cubes: Vec::new(),
+    };
+    let err = train_judged(
+        None,
+        &model,
+        &config,
+        &synthetic_cubes(),
+        dir.path(),
+        Some(&mut judge),
+        &mut |_| {},
+    )
+    .expect_err("judge fails");
+    let message = err.to_string();
+    assert!(
+        message.contains("scripted judge") && message.contains("judged more often"),
+        "{message}"
+    );
 }

@@ -3,22 +3,23 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::Instant;
 
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
-use indicatif::{ProgressBar, ProgressStyle};
 use vadscope::flow::FlowSource;
-use vadscope::model::{
-    BoxFilter, FlowUnits, ModelConfig, ScoreScale, TrainingStats, read_checkpoint_meta,
-};
+use vadscope::model::{BoxFilter, FlowUnits, ModelConfig, ScoreScale, read_checkpoint_meta};
+use vadscope::score::ValidationSet;
 use vadscope::sequence::Scenario;
 use vadscope::train::scenarios::{
     CubeExtraction, TrainRequest, scenario_folders, train_from_scenarios,
 };
-use vadscope::train::{StageSummary, TrainConfig, TrainEvent, TrainReport};
+use vadscope::train::{AnomalySelection, EpochJudge, TrainConfig};
 
-use super::score::parse_flow_source;
+use crate::cli::score::parse_flow_source;
+
+mod progress;
+
+use progress::{Progress, bar, print_report};
 
 /// Name of the extracted-cube cache inside the output folder.
 const CUBE_FILE: &str = "cubes.safetensors";
@@ -150,6 +151,18 @@ pub struct TrainArgs {
     /// (stored where present, else DIS).
     #[arg(long, default_value = "stored", value_name = "stored|dis[:preset]", value_parser = parse_flow_source)]
     flow: FlowSource,
+    /// Keep each stage's epoch by the pooled frame AUROC (ground-truth boxes, the reference
+    /// protocol, default weights) on these validation scenarios with anomalies — e.g.
+    /// `vadscope generate --preset test --count 6 --seed 1`, never the test set — instead of
+    /// the loss on held-out normal cubes. Their cubes are cut once with the model's box
+    /// filter and flows from --flow; each judged epoch's statistics come from 2,048 training
+    /// cubes (`anomaly_selection.stats_cubes` in --config).
+    #[arg(long, num_args = 1.., value_name = "DIR")]
+    select_on: Vec<PathBuf>,
+    /// With --select-on: judge every n-th epoch and the last (default 1, every epoch; a
+    /// judgement costs about one inference pass over the sample and the validation objects).
+    #[arg(long, value_name = "N", requires = "select_on")]
+    select_every: Option<usize>,
     /// Worker threads of the CPU backend (default: all cores).
     #[arg(long, value_name = "N")]
     threads: Option<usize>,
@@ -334,6 +347,20 @@ fn train_config(args: &TrainArgs) -> anyhow::Result<TrainConfig> {
     if let Some(s) = args.seed {
         config.seed = s;
     }
+    if !args.select_on.is_empty() {
+        let every = args.select_every.unwrap_or(1);
+        if every == 0 {
+            bail!("--select-every must be at least 1");
+        }
+        let base = config
+            .anomaly_selection
+            .unwrap_or(AnomalySelection::EVERY_EPOCH);
+        config.anomaly_selection = Some(AnomalySelection { every, ..base });
+    } else if config.anomaly_selection.is_some() {
+        bail!(
+            "the training config selects epochs by anomaly detection; name the validation              scenarios with --select-on"
+        );
+    }
     Ok(config)
 }
 
@@ -430,11 +457,13 @@ pub fn run(args: TrainArgs) -> anyhow::Result<ExitCode> {
         initial: args.init.clone(),
     };
 
+    let mut judge = selection_set(&args, &request.model)?;
     let extract_bar = bar("{prefix:>12} [{bar:40}] {pos}/{len} scenarios ({elapsed})");
     extract_bar.set_prefix("cubes");
     let mut progress = Progress::default();
     let report = train_from_scenarios(
         &request,
+        judge.as_mut().map(|j| j as &mut dyn EpochJudge),
         &mut |event| progress.on_event(event),
         &mut |done, total| {
             extract_bar.set_length(total as u64);
@@ -447,153 +476,24 @@ pub fn run(args: TrainArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn bar(template: &str) -> ProgressBar {
-    ProgressBar::new(0).with_style(
-        ProgressStyle::with_template(template)
-            .expect("static progress template")
-            .progress_chars("=> "),
-    )
-}
-
-fn stage_name(stage: usize) -> &'static str {
-    match stage {
-        1 => "memae",
-        2 => "cvae",
-        _ => "finetune",
+/// The validation scenarios of `--select-on`, cut for `model`; `None` without the option.
+fn selection_set(args: &TrainArgs, model: &ModelConfig) -> anyhow::Result<Option<ValidationSet>> {
+    if args.select_on.is_empty() {
+        return Ok(None);
     }
-}
-
-/// The progress bar of the running stage and the per-epoch lines.
-#[derive(Default)]
-struct Progress {
-    bar: Option<ProgressBar>,
-    epochs: usize,
-    steps_per_epoch: usize,
-    /// When the running epoch started: its line gives its wall time.
-    epoch_started: Option<Instant>,
-}
-
-impl Progress {
-    fn on_event(&mut self, event: &TrainEvent) {
-        match *event {
-            TrainEvent::StageStarted {
-                stage,
-                first_epoch,
-                epochs,
-                steps_per_epoch,
-            } => {
-                self.finish();
-                self.epochs = epochs;
-                self.steps_per_epoch = steps_per_epoch;
-                let bar =
-                    bar("{prefix:>12} [{bar:40}] {pos}/{len} steps ({per_sec}, eta {eta}) {msg}");
-                bar.set_prefix(format!("stage {stage} {}", stage_name(stage)));
-                bar.set_length((epochs * steps_per_epoch) as u64);
-                bar.set_position((first_epoch * steps_per_epoch) as u64);
-                if first_epoch > 0 {
-                    bar.suspend(|| {
-                        println!("stage {stage}: resuming at epoch {}", first_epoch + 1)
-                    });
-                }
-                self.bar = Some(bar);
-                self.epoch_started = Some(Instant::now());
-            }
-            TrainEvent::Step {
-                epoch, step, loss, ..
-            } => {
-                if let Some(bar) = &self.bar {
-                    bar.set_position((epoch * self.steps_per_epoch + step + 1) as u64);
-                    bar.set_message(format!(
-                        "epoch {}/{} loss {loss:.5}",
-                        epoch + 1,
-                        self.epochs
-                    ));
-                }
-            }
-            TrainEvent::EpochDone {
-                stage,
-                epoch,
-                train_loss,
-                val_loss,
-                lr,
-                best,
-            } => {
-                let val = val_loss.map_or("-".to_string(), |v| format!("{v:.6}"));
-                let seconds = self
-                    .epoch_started
-                    .replace(Instant::now())
-                    .map_or(0.0, |t| t.elapsed().as_secs_f64());
-                let line = format!(
-                    "stage {stage} {} epoch {}/{}: train loss {train_loss:.6}, validation loss \
-                     {val}, lr {lr:.2e}, {seconds:.1} s{}",
-                    stage_name(stage),
-                    epoch + 1,
-                    self.epochs,
-                    if best { " (best)" } else { "" }
-                );
-                match &self.bar {
-                    Some(bar) => bar.suspend(|| println!("{line}")),
-                    None => println!("{line}"),
-                }
-            }
-            TrainEvent::StatsDone(ref stats) => {
-                self.finish();
-                print_stats(stats);
-            }
-        }
-    }
-
-    fn finish(&mut self) {
-        if let Some(bar) = self.bar.take() {
-            bar.finish_and_clear();
-        }
-    }
-}
-
-fn print_stats(stats: &TrainingStats) {
+    let folders = scenario_folders(&args.select_on)?;
+    let load_bar = bar("{prefix:>12} [{bar:40}] {pos}/{len} scenarios ({elapsed})");
+    load_bar.set_prefix("selection");
+    let set = ValidationSet::load(&folders, model, args.flow, &mut |done, total| {
+        load_bar.set_length(total as u64);
+        load_bar.set_position(done as u64);
+    })
+    .context("cannot prepare the --select-on scenarios")?;
+    load_bar.finish_and_clear();
     println!(
-        "training statistics over {} cubes: S_r mean {:.4} std {:.4}; S_p mean {:.4} std {:.4}",
-        stats.cubes,
-        stats.flow_score.mean,
-        stats.flow_score.std,
-        stats.frame_score.mean,
-        stats.frame_score.std
+        "model selection: frame AUROC on {} validation scenarios ({} cubes)",
+        set.len(),
+        set.cubes()
     );
-    for (i, band) in stats.bands.iter().enumerate() {
-        println!(
-            "  band {}/{}: {} cubes, S_r mean {:.4} std {:.4}; S_p mean {:.4} std {:.4}",
-            i + 1,
-            stats.bands.len(),
-            band.cubes,
-            band.flow_score.mean,
-            band.flow_score.std,
-            band.frame_score.mean,
-            band.frame_score.std
-        );
-    }
-}
-
-fn print_report(report: &TrainReport) {
-    println!(
-        "{} training cubes, {} validation cubes",
-        report.split.0, report.split.1
-    );
-    for (i, summary) in report.stages.iter().enumerate() {
-        if let Some(StageSummary {
-            epochs,
-            best_epoch,
-            best_loss,
-            last_train_loss,
-        }) = summary
-        {
-            println!(
-                "stage {} {}: {epochs} epochs, kept epoch {} (selection loss {best_loss:.6}), \
-                 last train loss {last_train_loss:.6}",
-                i + 1,
-                stage_name(i + 1),
-                best_epoch + 1
-            );
-        }
-    }
-    println!("checkpoint: {}", report.checkpoint.display());
+    Ok(Some(set))
 }
