@@ -25,6 +25,11 @@ pub struct AnomalySelection {
     pub every: usize,
     /// Training cubes (evenly spaced) that the judged model's statistics come from.
     pub stats_cubes: usize,
+    /// Worker threads of a judgement (the sample's statistics and the judge's scoring);
+    /// `None`: those of the training steps. Inference gives the same numbers on any number
+    /// of threads, so a one-thread run can judge on all cores when nothing else runs.
+    #[serde(default)]
+    pub threads: Option<usize>,
 }
 
 impl AnomalySelection {
@@ -32,6 +37,7 @@ impl AnomalySelection {
     pub const EVERY_EPOCH: Self = Self {
         every: 1,
         stats_cubes: 2048,
+        threads: None,
     };
 
     /// Whether epoch `epoch` (0-based) of a stage of `epochs` is judged.
@@ -40,8 +46,9 @@ impl AnomalySelection {
     }
 }
 
-/// Rates the model of an epoch; higher is better.
-pub trait EpochJudge {
+/// Rates the model of an epoch; higher is better. `Send`, since a judgement may run on a
+/// thread pool of its own ([`AnomalySelection::threads`]).
+pub trait EpochJudge: Send {
     /// What the rating measures, for messages (e.g. "validation frame AUROC").
     fn name(&self) -> &str;
     /// The rating of `detector`: the epoch's model in inference mode, with training
@@ -67,6 +74,7 @@ mod tests {
         let s = AnomalySelection {
             every: 3,
             stats_cubes: 1,
+            threads: None,
         };
         let judged: Vec<usize> = (0..7).filter(|&e| s.judges(e, 7)).collect();
         assert_eq!(judged, vec![2, 5, 6]);

@@ -170,6 +170,17 @@ pub fn train_judged(
         model = initial_model(initial, model_config, &device)?;
     }
 
+    let judge_pool = match train_config.anomaly_selection.and_then(|s| s.threads) {
+        Some(threads) => Some(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .map_err(|e| {
+                    TrainError::Config(format!("cannot start {threads} judge threads: {e}"))
+                })?,
+        ),
+        None => None,
+    };
     let ctx = Context {
         model_config,
         train_config,
@@ -178,6 +189,7 @@ pub fn train_judged(
         val_idx: &val_idx,
         out_dir,
         device: &device,
+        judge_pool: judge_pool.as_ref(),
     };
     while state.stage <= 3 {
         let stage = state.stage;
@@ -316,6 +328,8 @@ struct Context<'a> {
     val_idx: &'a [usize],
     out_dir: &'a Path,
     device: &'a Device,
+    /// The threads of a judgement, when they differ from the training steps'.
+    judge_pool: Option<&'a rayon::ThreadPool>,
 }
 
 /// What ML-MemAE-SC learns from in stage 1: the cube's last flow, as the reference, or all
@@ -514,14 +528,28 @@ impl Context<'_> {
     }
 
     /// The rating `judge` gives the model of an epoch, scored with statistics over
-    /// `selection.stats_cubes` training cubes.
+    /// `selection.stats_cubes` training cubes, on the judge's threads.
     fn rate(
         &self,
         model: &Hf2Vad,
         selection: AnomalySelection,
         judge: &mut dyn EpochJudge,
     ) -> Result<f64, TrainError> {
-        let detector = self.detector(model.valid())?;
+        let eval = model.valid();
+        match self.judge_pool {
+            Some(pool) => pool.install(|| self.rate_here(eval, selection, judge)),
+            None => self.rate_here(eval, selection, judge),
+        }
+    }
+
+    /// [`Self::rate`] on the current threads, for the model already in eval mode.
+    fn rate_here(
+        &self,
+        model: Hf2Vad,
+        selection: AnomalySelection,
+        judge: &mut dyn EpochJudge,
+    ) -> Result<f64, TrainError> {
+        let detector = self.detector(model)?;
         let sample = evenly_spaced(self.train_idx, selection.stats_cubes.max(1));
         let stats = self.training_statistics(&detector, &sample)?;
         let detector = detector.with_training_stats(stats);

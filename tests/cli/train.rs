@@ -400,6 +400,8 @@ fn bad_input_gives_a_clear_error() {
         "--config",
         "--model-config",
         "--init",
+        "--select-on",
+        "--select-every",
     ] {
         assert!(help.contains(option), "--help lacks {option}:\n{help}");
     }

@@ -163,6 +163,11 @@ pub struct TrainArgs {
     /// judgement costs about one inference pass over the sample and the validation objects).
     #[arg(long, value_name = "N", requires = "select_on")]
     select_every: Option<usize>,
+    /// With --select-on: worker threads of each judgement (the sample's statistics and the
+    /// validation scoring; default: those of --threads). Inference gives the same numbers on
+    /// any number of threads, so a one-thread run can judge on all cores.
+    #[arg(long, value_name = "N", requires = "select_on")]
+    select_threads: Option<usize>,
     /// Worker threads of the CPU backend (default: all cores).
     #[arg(long, value_name = "N")]
     threads: Option<usize>,
@@ -348,14 +353,18 @@ fn train_config(args: &TrainArgs) -> anyhow::Result<TrainConfig> {
         config.seed = s;
     }
     if !args.select_on.is_empty() {
-        let every = args.select_every.unwrap_or(1);
-        if every == 0 {
-            bail!("--select-every must be at least 1");
-        }
         let base = config
             .anomaly_selection
             .unwrap_or(AnomalySelection::EVERY_EPOCH);
-        config.anomaly_selection = Some(AnomalySelection { every, ..base });
+        let every = args.select_every.unwrap_or(base.every);
+        if every == 0 || args.select_threads == Some(0) {
+            bail!("--select-every and --select-threads must be at least 1");
+        }
+        config.anomaly_selection = Some(AnomalySelection {
+            every,
+            threads: args.select_threads.or(base.threads),
+            ..base
+        });
     } else if config.anomaly_selection.is_some() {
         bail!(
             "the training config selects epochs by anomaly detection; name the validation              scenarios with --select-on"

@@ -344,6 +344,7 @@ fn anomaly_selection_keeps_the_judged_epoch_rated_highest() {
         AnomalySelection {
             every: 2,
             stats_cubes: 5,
+            threads: None,
         },
     );
     // Epochs 2, 4 and 5 (the last) are judged; the second judgement is the best.
@@ -432,4 +433,72 @@ fn anomaly_selection_without_a_judge_and_a_failing_judge_are_reported() {
         message.contains("scripted judge") && message.contains("judged more often"),
         "{message}"
     );
+}
+
+/// A judge whose rating is a sum of the model's scores over fixed cubes, so any change of
+/// the arithmetic shows; it records the threads it ran on.
+struct ScoreSumJudge {
+    cubes: CubeSet,
+    ratings: Vec<f64>,
+    threads: Vec<usize>,
+}
+
+impl EpochJudge for ScoreSumJudge {
+    fn name(&self) -> &str {
+        "score sum"
+    }
+
+    fn judge(&mut self, detector: &Detector) -> Result<f64, String> {
+        let all: Vec<usize> = (0..self.cubes.len()).collect();
+        let (frames, flows) = self.cubes.gather(&all);
+        let results = detector.infer(&frames, &flows).map_err(|e| e.to_string())?;
+        let rating = results
+            .iter()
+            .map(|r| f64::from(r.s_r) + f64::from(r.s_p))
+            .sum::<f64>();
+        self.ratings.push(rating);
+        self.threads.push(rayon::current_num_threads());
+        Ok(rating)
+    }
+}
+
+#[test]
+fn judging_on_more_threads_gives_the_same_ratings() {
+    let judged = |threads: Option<usize>| {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let config = judged_training(
+            2,
+            AnomalySelection {
+                every: 1,
+                stats_cubes: 12,
+                threads,
+            },
+        );
+        let mut judge = ScoreSumJudge {
+            cubes: synthetic_cubes(),
+            ratings: Vec::new(),
+            threads: Vec::new(),
+        };
+        let one_thread = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("pool");
+        one_thread.install(|| {
+            train_judged(
+                None,
+                &tiny_config(ModelConfig::paper()),
+                &config,
+                &synthetic_cubes(),
+                dir.path(),
+                Some(&mut judge),
+                &mut |_| {},
+            )
+            .expect("training")
+        });
+        (judge.ratings, judge.threads)
+    };
+    let (same_threads, on_one) = judged(None);
+    let (more_threads, on_two) = judged(Some(2));
+    assert_eq!((on_one, on_two), (vec![1, 1], vec![2, 2]));
+    assert_eq!(same_threads, more_threads);
 }
