@@ -51,7 +51,8 @@ enum Command {
     /// Write annotated frames and scores.csv (with provenance) of a scenario.
     Export(export::ExportArgs),
     /// Train HF²-VAD_AD (three stages) on normal driving scenarios.
-    Train(train::TrainArgs),
+    // Boxed: its many options would make every command as large as it.
+    Train(Box<train::TrainArgs>),
 }
 
 /// Parses the command line, runs the subcommand and maps its outcome to an exit status.
@@ -63,7 +64,7 @@ pub fn run() -> ExitCode {
         Some(Command::Generate(args)) => generate::run(args),
         Some(Command::Inspect(args)) => inspect::run(args),
         Some(Command::Flow(args)) => flow::run(args),
-        Some(Command::Train(args)) => train::run(args),
+        Some(Command::Train(args)) => train::run(*args),
         Some(Command::Score(args)) => score::run(args),
         Some(Command::Eval(args)) => eval::run(args),
         Some(Command::Render(args)) => render::run(args),
