@@ -19,7 +19,7 @@ use crate::train::EpochJudge;
 
 use super::ScoreError;
 use super::boxes::{BoxProvider, BoxSource};
-use super::cache::{CacheKey, ModelKey};
+use super::cache::{CacheKey, ModelKey, REFERENCE_BATCH};
 use super::evaluate::{Grouping, ScenarioScores, evaluate_table};
 use super::fusion::{FrameMetricOptions, FusionWeights};
 use super::run::{CubeSource, ScenarioCubes, ScoringPlan, score_table};
@@ -39,8 +39,6 @@ pub struct ValidationSet {
     scenarios: Vec<ValidationScenario>,
     geometry: CubeGeometry,
     box_filter: BoxFilter,
-    weights: FusionWeights,
-    options: FrameMetricOptions,
 }
 
 impl ValidationSet {
@@ -86,8 +84,6 @@ impl ValidationSet {
             scenarios,
             geometry,
             box_filter: config.box_filter,
-            weights: FusionWeights::default(),
-            options: FrameMetricOptions::default(),
         })
     }
 
@@ -134,7 +130,13 @@ impl ValidationSet {
                 None,
             )?);
         }
-        let rows = evaluate_table(&items, None, &self.weights, &self.options, Grouping::NONE)?;
+        let rows = evaluate_table(
+            &items,
+            None,
+            &FusionWeights::default(),
+            &FrameMetricOptions::default(),
+            Grouping::NONE,
+        )?;
         rows.first()
             .and_then(|row| row.metrics.as_ref())
             .map(|m| m.auroc)
@@ -161,22 +163,14 @@ fn cut(
     flow: FlowSource,
 ) -> Result<ValidationScenario, ScoreError> {
     let source = BoxSource::GroundTruth;
-    let plan = ScoringPlan {
-        scenario_root: scenario.root().to_path_buf(),
-        key: CacheKey {
-            scenario: scenario.name().to_string(),
-            // Never written: the key only names the in-memory table.
-            model: ModelKey(0),
-            boxes: source.key()?,
-            flow: flow.key(),
-        },
-        frame_ids: (0..scenario.len())
-            .filter_map(|i| scenario.frame_id(i))
-            .collect(),
-        frame_size: scenario.resolution(),
-        batch_size: super::cache::REFERENCE_BATCH,
-        pixel_sample: 1,
+    let key = CacheKey {
+        scenario: scenario.name().to_string(),
+        // Never written: the key only names the in-memory table.
+        model: ModelKey(0),
+        boxes: source.key()?,
+        flow: flow.key(),
     };
+    let plan = ScoringPlan::of_scenario(&scenario, key, REFERENCE_BATCH, 1);
     let mut provider = BoxProvider::new(&scenario, &source)?;
     let mut boxes = Vec::with_capacity(scenario.len());
     for index in 0..scenario.len() {

@@ -7,6 +7,7 @@
 pub mod config;
 pub mod cubes;
 pub mod error;
+mod measure;
 mod model_files;
 pub mod progress;
 pub mod scenarios;

@@ -24,10 +24,7 @@ use crate::atomic_file::{write_atomically, write_atomically_with};
 use crate::model::inference::to_model_conventions;
 use crate::model::layers::tensor;
 use crate::model::losses::{stage1_loss, stage2_loss, stage3_loss};
-use crate::model::{
-    CheckpointMeta, Detector, Hf2Vad, Latents, ModelConfig, NoiseRng, ScoreScale, StatsAccumulator,
-    TrainingStats, save_checkpoint,
-};
+use crate::model::{CheckpointMeta, Hf2Vad, Latents, ModelConfig, NoiseRng, save_checkpoint};
 
 use super::config::TrainConfig;
 use super::cubes::CubeSet;
@@ -36,7 +33,7 @@ use super::model_files::{
     FINAL, LAST_MODEL, LAST_OPTIM, best_file, initial_model, load_model, save_model,
 };
 use super::progress::{StageSummary, TrainEvent, TrainReport};
-use super::selection::{AnomalySelection, EpochJudge, evenly_spaced};
+use super::selection::EpochJudge;
 
 /// Persistent progress of a run (`state.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -316,25 +313,28 @@ fn write_state(dir: &Path, state: &TrainState) -> Result<(), TrainError> {
 }
 
 /// Scalar value of a loss tensor.
-fn scalar(t: Tensor<1>) -> f64 {
+pub(super) fn scalar(t: Tensor<1>) -> f64 {
     t.into_scalar::<f32>() as f64
 }
 
-struct Context<'a> {
-    model_config: &'a ModelConfig,
-    train_config: &'a TrainConfig,
-    data: &'a CubeSet,
-    train_idx: &'a [usize],
-    val_idx: &'a [usize],
-    out_dir: &'a Path,
-    device: &'a Device,
+/// What every stage of a run shares: configs, data and its split, output folder, devices.
+/// Its passes that measure a model (validation loss, judgements, statistics) are in
+/// [`super::measure`].
+pub(super) struct Context<'a> {
+    pub(super) model_config: &'a ModelConfig,
+    pub(super) train_config: &'a TrainConfig,
+    pub(super) data: &'a CubeSet,
+    pub(super) train_idx: &'a [usize],
+    pub(super) val_idx: &'a [usize],
+    pub(super) out_dir: &'a Path,
+    pub(super) device: &'a Device,
     /// The threads of a judgement, when they differ from the training steps'.
-    judge_pool: Option<&'a rayon::ThreadPool>,
+    pub(super) judge_pool: Option<&'a rayon::ThreadPool>,
 }
 
 /// What ML-MemAE-SC learns from in stage 1: the cube's last flow, as the reference, or all
 /// its flows when they are reconstructed jointly.
-fn stage1_input(config: &ModelConfig, flows: Tensor<4>) -> Tensor<4> {
+pub(super) fn stage1_input(config: &ModelConfig, flows: Tensor<4>) -> Tensor<4> {
     if config.joint_flows {
         flows
     } else {
@@ -343,14 +343,15 @@ fn stage1_input(config: &ModelConfig, flows: Tensor<4>) -> Tensor<4> {
 }
 
 /// A batch as model-ready tensors.
-struct Batch {
-    frames: Tensor<4>,
-    flows: Tensor<4>,
-    len: usize,
+pub(super) struct Batch {
+    pub(super) frames: Tensor<4>,
+    pub(super) flows: Tensor<4>,
+    pub(super) len: usize,
 }
 
 impl Context<'_> {
-    fn batch(&self, indices: &[usize], device: &Device) -> Batch {
+    /// The cubes `indices` as model-ready tensors on `device`.
+    pub(super) fn batch(&self, indices: &[usize], device: &Device) -> Batch {
         let c = self.model_config;
         let p = c.patch_size;
         let (frames, flows) = self.data.gather(indices);
@@ -440,7 +441,12 @@ impl Context<'_> {
                 epochs: epoch + 1,
                 best_epoch: state.best_epoch,
                 best_loss,
-                best_rating: self.train_config.anomaly_selection.map(|_| -best_loss),
+                // Before the first judged epoch nothing is kept yet, so nothing is rated.
+                best_rating: self
+                    .train_config
+                    .anomaly_selection
+                    .and(state.best_loss)
+                    .map(|value| -value),
                 last_train_loss: train_loss,
             });
             write_state(self.out_dir, state)?;
@@ -495,119 +501,5 @@ impl Context<'_> {
                 }
             }
         }
-    }
-
-    /// Mean stage loss over the validation cubes in eval mode (posterior means, no dropout,
-    /// BatchNorm running statistics); None without validation cubes.
-    fn validation_loss(&self, stage: usize, model: &Hf2Vad) -> Option<f64> {
-        if self.val_idx.is_empty() {
-            return None;
-        }
-        let eval = model.valid();
-        let device = Device::flex();
-        let w = &self.train_config.loss;
-        let c = self.model_config;
-        let mut sum = 0.0;
-        for chunk in self.val_idx.chunks(self.train_config.eval_batch) {
-            let batch = self.batch(chunk, &device);
-            let loss = if stage == 1 {
-                let input = stage1_input(c, batch.flows);
-                stage1_loss(&eval.memae.forward(input.clone()), input, w).total
-            } else {
-                let target = batch.frames.clone().narrow(1, 3 * c.clip_hist, 3);
-                let out = eval.forward(batch.frames, batch.flows.clone(), &Latents::Mean, None);
-                if stage == 2 {
-                    stage2_loss(&out, target, w).total
-                } else {
-                    stage3_loss(&out, batch.flows, target, w).total
-                }
-            };
-            sum += scalar(loss) * chunk.len() as f64;
-        }
-        Some(sum / self.val_idx.len() as f64)
-    }
-
-    /// The rating `judge` gives the model of an epoch, scored with statistics over
-    /// `selection.stats_cubes` training cubes, on the judge's threads.
-    fn rate(
-        &self,
-        model: &Hf2Vad,
-        selection: AnomalySelection,
-        judge: &mut dyn EpochJudge,
-    ) -> Result<f64, TrainError> {
-        let eval = model.valid();
-        match self.judge_pool {
-            Some(pool) => pool.install(|| self.rate_here(eval, selection, judge)),
-            None => self.rate_here(eval, selection, judge),
-        }
-    }
-
-    /// [`Self::rate`] on the current threads, for the model already in eval mode.
-    fn rate_here(
-        &self,
-        model: Hf2Vad,
-        selection: AnomalySelection,
-        judge: &mut dyn EpochJudge,
-    ) -> Result<f64, TrainError> {
-        let detector = self.detector(model)?;
-        let sample = evenly_spaced(self.train_idx, selection.stats_cubes.max(1));
-        let stats = self.training_statistics(&detector, &sample)?;
-        let detector = detector.with_training_stats(stats);
-        let rating = judge
-            .judge(&detector)
-            .map_err(|e| TrainError::Selection(format!("{}: {e}", judge.name())))?;
-        if !rating.is_finite() {
-            return Err(TrainError::Selection(format!(
-                "{} rated the model {rating}",
-                judge.name()
-            )));
-        }
-        Ok(rating)
-    }
-
-    /// `model` (in eval mode) as an inference detector, without training statistics.
-    fn detector(&self, model: Hf2Vad) -> Result<Detector, TrainError> {
-        let meta = CheckpointMeta {
-            config: self.model_config.clone(),
-            stats: None,
-            note: None,
-        };
-        Ok(Detector::new(model, meta, &Device::flex())?
-            .with_max_batch(self.train_config.eval_batch))
-    }
-
-    /// S_r/S_p moments and pixel-error quantiles of `detector` over the training cubes
-    /// `indices`.
-    fn training_statistics(
-        &self,
-        detector: &Detector,
-        indices: &[usize],
-    ) -> Result<TrainingStats, TrainError> {
-        let bands = self.model_config.score_bands;
-        let mut acc = StatsAccumulator::new(self.train_config.pixel_sample, self.train_config.seed)
-            .with_bands(bands)
-            .with_tails(self.model_config.score_scale == ScoreScale::TailSurprisal);
-        for chunk in indices.chunks(self.train_config.eval_batch) {
-            let (frames, flows) = self.data.gather(chunk);
-            for (&i, cube) in chunk.iter().zip(detector.infer(&frames, &flows)?) {
-                let centre = match self.data.centre_of(i) {
-                    Some(centre) => centre,
-                    None if bands > 1 => {
-                        return Err(TrainError::Data(format!(
-                            "{bands} score bands need the box centres of the cubes, which a cube file of an older vadscope lacks; delete cubes.safetensors in the output folder to extract them again"
-                        )));
-                    }
-                    None => 0.5,
-                };
-                acc.push_at(
-                    centre,
-                    cube.s_r,
-                    cube.s_p,
-                    &cube.flow_error,
-                    &cube.frame_error,
-                );
-            }
-        }
-        Ok(acc.finish())
     }
 }

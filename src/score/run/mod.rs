@@ -1,10 +1,9 @@
 //! The scoring run: boxes → cubes → model in batches → score cache, with a progress
 //! callback and a cancellation flag.
 //!
-//! The run is written against three small seams so that each can be replaced in tests and
-//! by later modules: [`FrameBoxes`] (the boxes of a frame; [`BoxProvider`] implements it),
-//! [`CubeSource`] (the cubes of a frame's boxes; [`ScenarioCubes`] cuts them from a
-//! scenario with `model::stc`) and [`CubeScorer`] (the model; [`Detector`] implements it).
+//! The run is written against three small seams (in `seams.rs`): [`FrameBoxes`],
+//! [`CubeSource`] and [`CubeScorer`]. [`run_scoring`] writes a cache file;
+//! [`score_table`] keeps the scalar table in memory.
 //!
 //! Per object the cache keeps S_r, S_p, the channel-averaged error maps, the predicted
 //! patch and the reconstructed last flow; per frame whether it had boxes and cubes. While
@@ -14,14 +13,14 @@
 //! reference code's per-batch pixel scaling). Batches follow object order (frame by frame)
 //! within the scenario; the reference batches its whole concatenated test set instead.
 
-use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::eval::{RobustStats, quantile_linear};
-use crate::model::stc::{Cube, CubeGeometry, cubes_at};
-use crate::model::{BoxFilter, CubeResult, Detector, ModelError, StatsAccumulator, TrainingStats};
-use crate::sequence::{BoxRecord, FrameId, Scenario};
+use crate::flow::FlowSource;
+use crate::model::stc::{Cube, CubeGeometry};
+use crate::model::{Detector, ModelError, StatsAccumulator};
+use crate::sequence::{FrameId, Scenario};
 
 use super::ScoreError;
 use super::boxes::{BoxProvider, BoxSource};
@@ -29,71 +28,10 @@ use super::cache::{
     CacheKey, CacheWriter, FrameEntry, FrameState, ModelKey, ObjectMaps, ObjectScore,
     PixelReference, REFERENCE_BATCH, ScoreCache, ScoreMeta, ScoreTable, frame_ids_hash,
 };
-use crate::flow::{FlowProvider, FlowSource};
 
-/// The boxes of each frame.
-pub trait FrameBoxes {
-    /// The boxes of frame `index`.
-    fn boxes(&mut self, index: usize) -> Result<Vec<BoxRecord>, ScoreError>;
-}
+mod seams;
 
-impl FrameBoxes for BoxProvider<'_> {
-    fn boxes(&mut self, index: usize) -> Result<Vec<BoxRecord>, ScoreError> {
-        BoxProvider::boxes(self, index)
-    }
-}
-
-impl<F: FnMut(usize) -> Result<Vec<BoxRecord>, ScoreError>> FrameBoxes for F {
-    fn boxes(&mut self, index: usize) -> Result<Vec<BoxRecord>, ScoreError> {
-        self(index)
-    }
-}
-
-/// The cubes of a frame's boxes.
-pub trait CubeSource {
-    /// Cubes of frame `index`, one per box of `boxes` whose crop is not empty, in box order.
-    fn cubes(&mut self, index: usize, boxes: &[BoxRecord]) -> Result<Vec<Cube>, ScoreError>;
-}
-
-impl<F: FnMut(usize, &[BoxRecord]) -> Result<Vec<Cube>, ScoreError>> CubeSource for F {
-    fn cubes(&mut self, index: usize, boxes: &[BoxRecord]) -> Result<Vec<Cube>, ScoreError> {
-        self(index, boxes)
-    }
-}
-
-/// The model as the run sees it.
-pub trait CubeScorer {
-    /// Patch side P.
-    fn patch_size(&self) -> usize;
-    /// Past frames per cube t.
-    fn clip_hist(&self) -> usize;
-    /// Training statistics (needed for frame scores).
-    fn training_stats(&self) -> Option<TrainingStats>;
-    /// Which boxes the model scores (those it was trained on); the rest are left out.
-    fn box_filter(&self) -> BoxFilter {
-        BoxFilter::KEEP_ALL
-    }
-    /// Scores B cubes: `frames` [B, 3(t+1), P, P] in [0, 1], `flows` [B, 2t, P, P].
-    fn score(&self, frames: &[f32], flows: &[f32]) -> Result<Vec<CubeResult>, ModelError>;
-}
-
-impl CubeScorer for Detector {
-    fn patch_size(&self) -> usize {
-        self.config().patch_size
-    }
-    fn clip_hist(&self) -> usize {
-        self.config().clip_hist
-    }
-    fn training_stats(&self) -> Option<TrainingStats> {
-        Detector::training_stats(self).cloned()
-    }
-    fn box_filter(&self) -> BoxFilter {
-        self.config().box_filter
-    }
-    fn score(&self, frames: &[f32], flows: &[f32]) -> Result<Vec<CubeResult>, ModelError> {
-        self.infer(frames, flows)
-    }
-}
+pub use seams::{CubeScorer, CubeSource, FrameBoxes, ScenarioCubes};
 
 /// How far a run has come.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -121,6 +59,27 @@ pub struct ScoringPlan {
     pub batch_size: usize,
     /// Per-element errors kept for the scenario's pixel statistics (reservoir sample).
     pub pixel_sample: usize,
+}
+
+impl ScoringPlan {
+    /// The plan for every frame of `scenario`, written under `key`.
+    pub fn of_scenario(
+        scenario: &Scenario,
+        key: CacheKey,
+        batch_size: usize,
+        pixel_sample: usize,
+    ) -> Self {
+        Self {
+            scenario_root: scenario.root().to_path_buf(),
+            key,
+            frame_ids: (0..scenario.len())
+                .filter_map(|i| scenario.frame_id(i))
+                .collect(),
+            frame_size: scenario.resolution(),
+            batch_size,
+            pixel_sample,
+        }
+    }
 }
 
 /// What to score a scenario with, besides the model.
@@ -171,66 +130,9 @@ pub fn score_scenario_with(
 ) -> Result<ScoreCache, ScoreError> {
     let key = request.key(scenario, model)?;
     let path = key.path_in(&scenario.cache_dir()?);
-    let plan = ScoringPlan {
-        scenario_root: scenario.root().to_path_buf(),
-        key,
-        frame_ids: (0..scenario.len())
-            .filter_map(|i| scenario.frame_id(i))
-            .collect(),
-        frame_size: scenario.resolution(),
-        batch_size: request.batch_size,
-        pixel_sample: DEFAULT_PIXEL_SAMPLE,
-    };
+    let plan = ScoringPlan::of_scenario(scenario, key, request.batch_size, DEFAULT_PIXEL_SAMPLE);
     let mut boxes = BoxProvider::new(scenario, &request.boxes)?;
     run_scoring(&plan, &mut boxes, cubes, scorer, &path, progress, cancel)
-}
-
-/// The cubes of a scenario's frames, cut by [`cubes_at`] from its frames and the flows of a
-/// [`FlowProvider`].
-pub struct ScenarioCubes<'a> {
-    scenario: &'a Scenario,
-    flows: FlowProvider<'a>,
-    geometry: CubeGeometry,
-}
-
-impl<'a> ScenarioCubes<'a> {
-    /// Cubes of `geometry` from `scenario`, flows from `flow`.
-    pub fn new(scenario: &'a Scenario, flow: FlowSource, geometry: CubeGeometry) -> Self {
-        Self {
-            scenario,
-            flows: FlowProvider::new(scenario, flow),
-            geometry,
-        }
-    }
-}
-
-impl CubeSource for ScenarioCubes<'_> {
-    fn cubes(&mut self, index: usize, boxes: &[BoxRecord]) -> Result<Vec<Cube>, ScoreError> {
-        let scenario = self.scenario;
-        let flows = &mut self.flows;
-        // The cube builder speaks ModelError; our own errors (which name the file) are kept
-        // aside and reported as they are.
-        let own_error: RefCell<Option<ScoreError>> = RefCell::new(None);
-        let keep = |e: ScoreError| {
-            let message = e.to_string();
-            own_error.borrow_mut().get_or_insert(e);
-            ModelError::Cube(message)
-        };
-        let result = cubes_at(
-            index,
-            boxes,
-            self.geometry,
-            &mut |k| scenario.rgb(k).map_err(|e| keep(e.into())),
-            &mut |k| flows.flow(k).map_err(|e| keep(e.into())),
-        );
-        result.map_err(|source| {
-            own_error.take().unwrap_or_else(|| ScoreError::Model {
-                scenario: scenario.root().to_path_buf(),
-                frame: index,
-                source,
-            })
-        })
-    }
 }
 
 /// Scores `scenario` with `detector`: boxes from `request.boxes`, cubes cut by `model::stc`
@@ -311,12 +213,34 @@ fn channel_mean(values: &[f32], channels: usize, area: usize) -> Vec<f32> {
     out
 }
 
+/// Where a scoring run puts each object's maps.
+trait MapSink {
+    /// Takes the maps of the next object; `maps` builds them, so a sink that keeps none
+    /// never pays for them.
+    fn push(&mut self, maps: impl FnOnce() -> ObjectMaps) -> Result<(), ScoreError>;
+}
+
+impl MapSink for CacheWriter {
+    fn push(&mut self, maps: impl FnOnce() -> ObjectMaps) -> Result<(), ScoreError> {
+        self.push_maps(&maps())
+    }
+}
+
+/// Keeps no maps: the run of an in-memory table.
+struct NoMaps;
+
+impl MapSink for NoMaps {
+    fn push(&mut self, _: impl FnOnce() -> ObjectMaps) -> Result<(), ScoreError> {
+        Ok(())
+    }
+}
+
 /// The state of a run between batches.
-struct Run<'a> {
+struct Run<'a, S> {
     plan: &'a ScoringPlan,
     scorer: &'a dyn CubeScorer,
-    /// Where the per-object maps go; `None` when only the table is wanted.
-    writer: Option<CacheWriter>,
+    /// Where the per-object maps go.
+    maps: S,
     patch: usize,
     clip_hist: usize,
     objects: Vec<ObjectScore>,
@@ -326,7 +250,7 @@ struct Run<'a> {
     pending: Vec<(usize, Cube)>,
 }
 
-impl Run<'_> {
+impl<S: MapSink> Run<'_, S> {
     /// Scores the first `count` pending cubes (all when fewer are pending).
     fn flush(&mut self, count: usize) -> Result<(), ScoreError> {
         let count = count.min(self.pending.len());
@@ -375,24 +299,21 @@ impl Run<'_> {
                     )),
                 });
             }
-            if let Some(writer) = &mut self.writer {
-                let maps = ObjectMaps {
-                    flow_error: channel_mean(&r.flow_error, 2 * t, area),
-                    frame_error: channel_mean(&r.frame_error, 3, area),
-                    predicted: r
-                        .predicted_frame
-                        .iter()
-                        .map(|&v| (v * 255.0).round().clamp(0.0, 255.0) as u8)
-                        .collect(),
-                    // Back to native pixels, so the view compares it with the stored flow.
-                    recon_flow: r.recon_flows[2 * (t - 1) * area..]
-                        .chunks(area)
-                        .zip(cube.flow_scale)
-                        .flat_map(|(plane, scale)| plane.iter().map(move |v| v / scale))
-                        .collect(),
-                };
-                writer.push_maps(&maps)?;
-            }
+            self.maps.push(|| ObjectMaps {
+                flow_error: channel_mean(&r.flow_error, 2 * t, area),
+                frame_error: channel_mean(&r.frame_error, 3, area),
+                predicted: r
+                    .predicted_frame
+                    .iter()
+                    .map(|&v| (v * 255.0).round().clamp(0.0, 255.0) as u8)
+                    .collect(),
+                // Back to native pixels, so the view compares it with the stored flow.
+                recon_flow: r.recon_flows[2 * (t - 1) * area..]
+                    .chunks(area)
+                    .zip(cube.flow_scale)
+                    .flat_map(|(plane, scale)| plane.iter().map(move |v| v / scale))
+                    .collect(),
+            })?;
             self.scenario_pixels
                 .push(r.s_r, r.s_p, &r.flow_error, &r.frame_error);
             self.batch.flow.extend_from_slice(&r.flow_error);
@@ -428,9 +349,8 @@ pub fn run_scoring(
     progress: &mut dyn FnMut(ScoreProgress),
     cancel: &AtomicBool,
 ) -> Result<ScoreCache, ScoreError> {
-    let (table, writer) = score_objects(plan, boxes, cubes, scorer, Some(path), progress, cancel)?;
-    let writer =
-        writer.ok_or_else(|| ScoreError::Invalid("the cache writer went missing".into()))?;
+    let create = |patch| CacheWriter::create(path, patch);
+    let (table, writer) = score_objects(plan, boxes, cubes, scorer, create, progress, cancel)?;
     let written = writer.finish(&table)?;
     ScoreCache::open(&written)
 }
@@ -444,20 +364,21 @@ pub fn score_table(
     scorer: &dyn CubeScorer,
     cancel: &AtomicBool,
 ) -> Result<ScoreTable, ScoreError> {
-    score_objects(plan, boxes, cubes, scorer, None, &mut |_| {}, cancel).map(|(table, _)| table)
+    let no_maps = |_| Ok(NoMaps);
+    score_objects(plan, boxes, cubes, scorer, no_maps, &mut |_| {}, cancel).map(|(table, _)| table)
 }
 
-/// The scoring run behind [`run_scoring`] and [`score_table`]: the table, and the writer
-/// holding the maps when `maps_path` is given (not yet finished).
-fn score_objects(
+/// The scoring run behind [`run_scoring`] and [`score_table`]: the table, and the sink that
+/// took the maps, made by `sink(patch)` once the scorer has been checked.
+fn score_objects<S: MapSink>(
     plan: &ScoringPlan,
     boxes: &mut dyn FrameBoxes,
     cubes: &mut dyn CubeSource,
     scorer: &dyn CubeScorer,
-    maps_path: Option<&Path>,
+    sink: impl FnOnce(usize) -> Result<S, ScoreError>,
     progress: &mut dyn FnMut(ScoreProgress),
     cancel: &AtomicBool,
-) -> Result<(ScoreTable, Option<CacheWriter>), ScoreError> {
+) -> Result<(ScoreTable, S), ScoreError> {
     let training = scorer.training_stats().ok_or(ScoreError::NoTrainingStats)?;
     let box_filter = scorer.box_filter();
     let patch = scorer.patch_size();
@@ -473,9 +394,7 @@ fn score_objects(
     let mut run = Run {
         plan,
         scorer,
-        writer: maps_path
-            .map(|path| CacheWriter::create(path, patch))
-            .transpose()?,
+        maps: sink(patch)?,
         patch,
         clip_hist,
         objects: Vec::new(),
@@ -574,7 +493,7 @@ fn score_objects(
         frames_total: total,
         objects: table.objects.len(),
     });
-    Ok((table, run.writer))
+    Ok((table, run.maps))
 }
 
 #[cfg(test)]
