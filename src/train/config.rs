@@ -4,6 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::averaging::WeightAveraging;
 use super::selection::AnomalySelection;
 
 use crate::model::losses::LossWeights;
@@ -86,6 +87,10 @@ pub struct TrainConfig {
     /// rule): the lowest normal validation loss.
     #[serde(default)]
     pub anomaly_selection: Option<AnomalySelection>,
+    /// Average the weights of each trained stage's late epochs; selection then rates the
+    /// running average. `None` (the default, and the reference): no averaging.
+    #[serde(default)]
+    pub averaging: Option<WeightAveraging>,
 }
 
 impl Default for TrainConfig {
@@ -126,6 +131,7 @@ impl Default for TrainConfig {
             eval_batch: 64,
             pixel_sample: 4_000_000,
             anomaly_selection: None,
+            averaging: None,
         }
     }
 }

@@ -1,9 +1,10 @@
 //! Training of HF²-VAD_AD: the three stages of the reference (ML-MemAE-SC on the last flow;
 //! the CVAE with ML-MemAE-SC frozen; everything fine-tuned), over sets of spatio-temporal
 //! cubes, with seeded and resumable runs, model selection on held-out normal cubes or on
-//! validation scenarios with anomalies (never on test data) and the training statistics the
-//! scores are normalised with.
+//! validation scenarios with anomalies (never on test data), optional averaging of the late
+//! epochs' weights and the training statistics the scores are normalised with.
 
+pub mod averaging;
 pub mod config;
 pub mod cubes;
 pub mod error;
@@ -14,6 +15,7 @@ pub mod scenarios;
 pub mod selection;
 pub mod stages;
 
+pub use averaging::WeightAveraging;
 pub use config::{LrSchedule, StageConfig, TrainConfig};
 pub use cubes::CubeSet;
 pub use error::TrainError;

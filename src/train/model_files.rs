@@ -20,6 +20,8 @@ use super::error::TrainError;
 pub(super) const LAST_MODEL: &str = "last_model.bpk";
 /// Adam's state after the last finished epoch.
 pub(super) const LAST_OPTIM: &str = "last_optim.bpk";
+/// The running weight average of the current stage ([`super::averaging`]).
+pub(super) const AVERAGE_MODEL: &str = "average_model.bpk";
 /// The final vadscope checkpoint.
 pub(super) const FINAL: &str = "model.safetensors";
 

@@ -44,8 +44,11 @@ pub enum TrainEvent {
         train_loss: f64,
         /// Mean validation loss (None without validation cubes).
         val_loss: Option<f64>,
-        /// The judge's rating of this epoch's model, when anomaly selection judged it.
+        /// The judge's rating of this epoch's candidate, when anomaly selection judged it.
         rating: Option<f64>,
+        /// Epochs averaged into this epoch's candidate (the losses and rating are its):
+        /// 0 when it is the epoch's own weights.
+        averaged: usize,
         /// Learning rate used.
         lr: f64,
         /// Whether this epoch is the best of the stage so far.
@@ -62,6 +65,9 @@ pub struct StageSummary {
     pub epochs: usize,
     /// Epoch whose model was kept (0-based).
     pub best_epoch: usize,
+    /// Epochs averaged into the kept model, ending at `best_epoch` (0: its own weights).
+    #[serde(default)]
+    pub best_averaged: usize,
     /// Its selection value, lowest kept: its validation loss (training loss when there was
     /// no validation data), or with anomaly selection minus its rating.
     pub best_loss: f64,

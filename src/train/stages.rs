@@ -1,6 +1,7 @@
 //! The three training stages of HF²-VAD (spec §5) over a [`CubeSet`], with per-epoch
 //! checkpoints, resume, model selection (on held-out normal cubes, or by an
-//! [`EpochJudge`], see [`super::selection`]) and the final training statistics.
+//! [`EpochJudge`], see [`super::selection`]), optional weight averaging of the late epochs
+//! ([`super::averaging`]) and the final training statistics.
 //!
 //! Output folder layout:
 //!
@@ -9,6 +10,7 @@
 //! | `state.json` | progress: stage, next epoch, best selection value, RNG state, summaries |
 //! | `last_model.bpk`, `last_optim.bpk` | model and Adam state after the last finished epoch |
 //! | `stage{1,2,3}_best.bpk` | the model at the kept epoch of each stage |
+//! | `average_model.bpk` | the running weight average of the current stage, with averaging |
 //! | `model.safetensors` | the final vadscope checkpoint (config, training statistics) |
 //!
 //! The model files are named and written in [`super::model_files`].
@@ -26,11 +28,12 @@ use crate::model::layers::tensor;
 use crate::model::losses::{stage1_loss, stage2_loss, stage3_loss};
 use crate::model::{CheckpointMeta, Hf2Vad, Latents, ModelConfig, NoiseRng, save_checkpoint};
 
+use super::averaging::RunningAverage;
 use super::config::TrainConfig;
 use super::cubes::CubeSet;
 use super::error::TrainError;
 use super::model_files::{
-    FINAL, LAST_MODEL, LAST_OPTIM, best_file, initial_model, load_model, save_model,
+    AVERAGE_MODEL, FINAL, LAST_MODEL, LAST_OPTIM, best_file, initial_model, load_model, save_model,
 };
 use super::progress::{StageSummary, TrainEvent, TrainReport};
 use super::selection::EpochJudge;
@@ -45,6 +48,12 @@ struct TrainState {
     next_epoch: usize,
     best_loss: Option<f64>,
     best_epoch: usize,
+    /// Epochs averaged into the kept model (0: its own epoch's weights).
+    #[serde(default)]
+    best_averaged: usize,
+    /// Epochs in the running weight average (`AVERAGE_MODEL`) of the current stage.
+    #[serde(default)]
+    averaged: usize,
     rng_state: u64,
     summaries: [Option<StageSummary>; 3],
 }
@@ -147,6 +156,8 @@ pub fn train_judged(
             next_epoch: 0,
             best_loss: None,
             best_epoch: 0,
+            best_averaged: 0,
+            averaged: 0,
             rng_state: NoiseRng::new(train_config.seed ^ 0x5EED).state(),
             summaries: [None, None, None],
         },
@@ -219,6 +230,8 @@ pub fn train_judged(
         state.next_epoch = 0;
         state.best_loss = None;
         state.best_epoch = 0;
+        state.best_averaged = 0;
+        state.averaged = 0;
         write_state(out_dir, &state)?;
     }
 
@@ -385,6 +398,15 @@ impl Context<'_> {
             steps_per_epoch: steps,
         });
         let mut rng = NoiseRng::from_state(state.rng_state);
+        let averaging = self.train_config.averaging;
+        let mut average = match averaging {
+            Some(_) if state.averaged > 0 => {
+                let mut saved = model.valid().train();
+                load_model(&mut saved, &self.out_dir.join(AVERAGE_MODEL))?;
+                Some(RunningAverage::resumed(saved, state.averaged))
+            }
+            _ => None,
+        };
         for epoch in state.next_epoch..settings.epochs {
             let lr = settings.schedule.rate(settings.lr, epoch);
             let mut order = self.train_idx.to_vec();
@@ -410,10 +432,30 @@ impl Context<'_> {
                 });
             }
             let train_loss = loss_sum / seen.max(1) as f64;
-            let val_loss = self.validation_loss(stage, &model);
+            // From the averaging's first epoch on, the candidate of each epoch is the
+            // running mean of the weights; training goes on from the epoch's own.
+            let averaged_model = match averaging.filter(|a| a.includes(epoch)) {
+                Some(averaging) => {
+                    let folded = match average.take() {
+                        None => RunningAverage::start(&model),
+                        Some(mean) => mean.fold_in(&model)?,
+                    };
+                    let prepared = self.prepare_average(&folded, averaging, stage);
+                    save_model(&prepared, &self.out_dir.join(AVERAGE_MODEL))?;
+                    average = Some(folded.with_weights(&prepared));
+                    Some(prepared)
+                }
+                None => None,
+            };
+            let averaged = average
+                .as_ref()
+                .filter(|_| averaged_model.is_some())
+                .map_or(0, RunningAverage::count);
+            let candidate_model = averaged_model.as_ref().unwrap_or(&model);
+            let val_loss = self.validation_loss(stage, candidate_model);
             let rating = match (self.train_config.anomaly_selection, judge.as_deref_mut()) {
                 (Some(selection), Some(judge)) if selection.judges(epoch, settings.epochs) => {
-                    Some(self.rate(&model, selection, judge)?)
+                    Some(self.rate(candidate_model, selection, judge)?)
                 }
                 _ => None,
             };
@@ -426,7 +468,8 @@ impl Context<'_> {
             if let Some(value) = candidate.filter(|_| best) {
                 state.best_loss = Some(value);
                 state.best_epoch = epoch;
-                save_model(&model, &self.out_dir.join(best_file(stage)))?;
+                state.best_averaged = averaged;
+                save_model(candidate_model, &self.out_dir.join(best_file(stage)))?;
             }
             save_model(&model, &self.out_dir.join(LAST_MODEL))?;
             write_atomically_with(&self.out_dir.join(LAST_OPTIM), |scratch| {
@@ -435,11 +478,13 @@ impl Context<'_> {
                     .map_err(|e| TrainError::file(scratch, e))
             })?;
             state.next_epoch = epoch + 1;
+            state.averaged = averaged;
             state.rng_state = rng.state();
             let best_loss = state.best_loss.unwrap_or(train_loss);
             state.summaries[stage - 1] = Some(StageSummary {
                 epochs: epoch + 1,
                 best_epoch: state.best_epoch,
+                best_averaged: state.best_averaged,
                 best_loss,
                 // Before the first judged epoch nothing is kept yet, so nothing is rated.
                 best_rating: self
@@ -456,6 +501,7 @@ impl Context<'_> {
                 train_loss,
                 val_loss,
                 rating,
+                averaged,
                 lr,
                 best,
             });

@@ -505,6 +505,29 @@ fn select_on_keeps_the_epoch_with_the_best_validation_auroc() {
         .collect();
     assert_eq!(judged, vec![false, true, true], "{stdout}");
 
+    // Weight averaging from the second epoch: epochs 2 and 3 rate the running mean.
+    let out = selected("averaged", &["--select-every", "2", "--average-from", "2"]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let averaged: Vec<bool> = stdout
+        .lines()
+        .filter(|l| l.starts_with("stage 1 memae epoch"))
+        .map(|l| l.contains("average of"))
+        .collect();
+    assert_eq!(averaged, vec![false, true, true], "{stdout}");
+    assert!(stdout.contains("(average of 2 epochs)"), "{stdout}");
+    assert!(
+        stdout.contains("kept epoch 2 (") || stdout.contains("kept the average of epochs 2–3 ("),
+        "{stdout}"
+    );
+    let zero = selected("zero-average", &["--average-from", "0"]);
+    assert!(!zero.status.success());
+    assert!(
+        text(&zero.stderr).contains("--average-from"),
+        "{}",
+        text(&zero.stderr)
+    );
+
     let zero = selected("zero", &["--select-every", "0"]);
     assert!(!zero.status.success());
     assert!(

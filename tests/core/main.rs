@@ -64,8 +64,10 @@ mod sequence {
 }
 
 mod train {
-    //! `vadscope::train`: cubes from scenarios and the training stages.
+    //! `vadscope::train`: cubes from scenarios, the training stages and weight averaging.
 
+    mod averaging;
+    mod fixtures;
     mod scenarios;
     mod stages;
 }

@@ -13,7 +13,7 @@ use vadscope::sequence::Scenario;
 use vadscope::train::scenarios::{
     CubeExtraction, TrainRequest, scenario_folders, train_from_scenarios,
 };
-use vadscope::train::{AnomalySelection, EpochJudge, TrainConfig};
+use vadscope::train::{AnomalySelection, EpochJudge, TrainConfig, WeightAveraging};
 
 use crate::cli::score::parse_flow_source;
 
@@ -168,6 +168,12 @@ pub struct TrainArgs {
     /// any number of threads, so a one-thread run can judge on all cores.
     #[arg(long, value_name = "N", requires = "select_on")]
     select_threads: Option<usize>,
+    /// Average the weights of each trained stage's epochs from the N-th (counted from 1) on
+    /// (stochastic weight averaging): from there, each epoch's candidate for selection is
+    /// the running mean of the weights (BatchNorm statistics recomputed over 2,048 training
+    /// cubes), while training goes on from the epoch's own weights.
+    #[arg(long, value_name = "N")]
+    average_from: Option<usize>,
     /// Worker threads of the CPU backend (default: all cores).
     #[arg(long, value_name = "N")]
     threads: Option<usize>,
@@ -367,8 +373,21 @@ fn train_config(args: &TrainArgs) -> anyhow::Result<TrainConfig> {
         });
     } else if config.anomaly_selection.is_some() {
         bail!(
-            "the training config selects epochs by anomaly detection; name the validation              scenarios with --select-on"
+            "the training config selects epochs by anomaly detection; name the validation \
+             scenarios with --select-on"
         );
+    }
+    if let Some(from) = args.average_from {
+        if from == 0 {
+            bail!("--average-from counts epochs from 1");
+        }
+        let base = config
+            .averaging
+            .unwrap_or(WeightAveraging::from_epoch(from - 1));
+        config.averaging = Some(WeightAveraging {
+            from_epoch: from - 1,
+            ..base
+        });
     }
     Ok(config)
 }

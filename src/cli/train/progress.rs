@@ -79,10 +79,16 @@ impl Progress {
                 train_loss,
                 val_loss,
                 rating,
+                averaged,
                 lr,
                 best,
             } => {
                 let val = val_loss.map_or("-".to_string(), |v| format!("{v:.6}"));
+                let of = match averaged {
+                    0 => String::new(),
+                    1 => " (average of 1 epoch)".to_string(),
+                    n => format!(" (average of {n} epochs)"),
+                };
                 let rating = rating.map_or(String::new(), |r| {
                     format!(", validation frame AUROC {:.2} %", 100.0 * r)
                 });
@@ -92,7 +98,7 @@ impl Progress {
                     .map_or(0.0, |t| t.elapsed().as_secs_f64());
                 let line = format!(
                     "stage {stage} {} epoch {}/{}: train loss {train_loss:.6}, validation loss \
-                     {val}{rating}, lr {lr:.2e}, {seconds:.1} s{}",
+                     {val}{rating}{of}, lr {lr:.2e}, {seconds:.1} s{}",
                     stage_name(stage),
                     epoch + 1,
                     self.epochs,
@@ -151,21 +157,29 @@ pub(super) fn print_report(report: &TrainReport) {
         if let Some(StageSummary {
             epochs,
             best_epoch,
+            best_averaged,
             best_loss,
             best_rating,
             last_train_loss,
         }) = summary
         {
+            let kept = match best_averaged {
+                0 | 1 => format!("epoch {}", best_epoch + 1),
+                n => format!(
+                    "the average of epochs {}–{}",
+                    best_epoch + 2 - n,
+                    best_epoch + 1
+                ),
+            };
             let kept_by = match best_rating {
                 Some(r) => format!("validation frame AUROC {:.2} %", 100.0 * r),
                 None => format!("selection loss {best_loss:.6}"),
             };
             println!(
-                "stage {} {}: {epochs} epochs, kept epoch {} ({kept_by}), last train loss \
+                "stage {} {}: {epochs} epochs, kept {kept} ({kept_by}), last train loss \
                  {last_train_loss:.6}",
                 i + 1,
                 stage_name(i + 1),
-                best_epoch + 1
             );
         }
     }
