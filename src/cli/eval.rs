@@ -175,6 +175,7 @@ fn baseline_rows(
                     ));
                 }
             }
+            s.scenario.release_decoded();
             Ok(out)
         })
         .collect::<anyhow::Result<_>>()?;
@@ -251,6 +252,7 @@ fn pixel_counts(
                         .with_context(|| {
                             format!("pixel metrics of {}", s.scenario.root().display())
                         })?;
+                s.scenario.release_decoded();
                 if frames == 0 {
                     eprintln!(
                         "{}: no anomaly masks (SEMANTIC_IMG), no pixel metrics",

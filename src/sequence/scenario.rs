@@ -518,6 +518,13 @@ impl Scenario {
         self.cache.budget()
     }
 
+    /// Drops every decoded frame the cache holds. Commands that go through many scenarios
+    /// call it when they are done with one, so their memory stays flat in the number of
+    /// scenarios (each scenario's cache may otherwise keep up to its whole budget).
+    pub fn release_decoded(&self) {
+        self.cache.clear();
+    }
+
     /// Changes the decoded-frame cache's byte budget (evicting at once when lowered).
     pub fn set_cache_budget(&self, bytes: usize) {
         self.cache.set_budget(bytes);

@@ -256,6 +256,12 @@ fn frame_cache_stays_within_its_byte_budget() {
     scenario.set_cache_budget(frame_bytes);
     assert!(scenario.cache_bytes() <= frame_bytes);
     assert_eq!(scenario.cache_entries(), 1);
+    // A batch command done with the scenario lets its frames go; reading again decodes.
+    scenario.release_decoded();
+    assert_eq!((scenario.cache_entries(), scenario.cache_bytes()), (0, 0));
+    let decoded = scenario.rgb(19).expect("decodes again");
+    assert_eq!(decoded.get_pixel(0, 0).0[2], 19);
+    assert!(!std::sync::Arc::ptr_eq(&decoded, &same));
 }
 
 #[test]
