@@ -3,7 +3,7 @@
 # scenarios (384×256, 80 frames each, from `generate --preset test`): it should stay flat in
 # the number of scenarios, since eval lets each scenario's decoded frames go once scored
 # and keeps only its score table. Prints a Markdown table (scenarios, peak RSS, ratio to
-# the 2-scenario run, wall time).
+# the 2-scenario run).
 # Usage: bash benches/eval_memory.sh [WORK_DIR]   (default /tmp/vadscope-eval-memory)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,8 +18,8 @@ if [ ! -f "$work/all/.complete" ]; then
   touch "$work/all/.complete"
 fi
 mapfile -t scenarios < <(find "$work/all" -mindepth 1 -maxdepth 1 -type d | sort)
-echo "| scenarios | peak RSS | ratio to 2 | wall time |"
-echo "|---|---|---|---|"
+echo "| scenarios | peak RSS | ratio to 2 |"
+echo "|---|---|---|"
 base=""
 for n in 2 8 32; do
   set_dir="$work/n$n"
@@ -30,9 +30,9 @@ for n in 2 8 32; do
     cp -al "$s" "$set_dir/"
     rm -rf "$set_dir/$(basename "$s")/.vadscope"
   done
-  /usr/bin/time -f "%M %e" -o "$work/time$n" "$vadscope" eval "$set_dir" --boxes gt --by none \
+  /usr/bin/time -f "%M" -o "$work/time$n" "$vadscope" eval "$set_dir" --boxes gt --by none \
     > "$work/eval$n.md" 2> "$work/eval$n.log"
-  read -r kb seconds < "$work/time$n"
+  read -r kb < "$work/time$n"
   base="${base:-$kb}"
-  echo "| $n | $((kb / 1024)) MB | $(awk -v a="$kb" -v b="$base" 'BEGIN { printf "%.2f", a / b }') | ${seconds} s |"
+  echo "| $n | $((kb / 1024)) MB | $(awk -v a="$kb" -v b="$base" 'BEGIN { printf "%.2f", a / b }') |"
 done
