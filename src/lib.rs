@@ -8,6 +8,7 @@ pub mod annotate;
 pub mod app;
 pub mod atomic_file;
 pub mod box_crop;
+pub mod cpu_guard;
 pub mod eval;
 pub mod export;
 pub mod flow;

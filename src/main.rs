@@ -4,9 +4,9 @@ mod cli;
 
 fn main() -> std::process::ExitCode {
     // Before anything else runs code compiled for extensions the CPU may lack.
-    let missing = cli::cpu::missing_extensions();
+    let missing = vadscope::cpu_guard::missing_extensions();
     if !missing.is_empty() {
-        eprintln!("error: {}", cli::cpu::refusal(&missing));
+        eprintln!("error: {}", vadscope::cpu_guard::refusal(&missing));
         return std::process::ExitCode::FAILURE;
     }
     cli::run()

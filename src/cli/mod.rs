@@ -2,7 +2,6 @@
 //! subcommand turns its arguments into library calls and prints the result; errors are
 //! reported with their whole cause chain and a non-zero exit status.
 
-pub mod cpu;
 mod eval;
 mod export;
 mod flow;

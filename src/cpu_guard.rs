@@ -1,5 +1,7 @@
-//! The instruction-set guard: refuses to start, with a message that says how to rebuild, on
-//! an x86-64 CPU that lacks an extension the build was compiled for.
+//! The instruction-set guard the `vadscope` binary runs first: it refuses to start, with a
+//! message that says how to rebuild, on an x86-64 CPU that lacks an extension the build was
+//! compiled for. It lives in the library (built with the same target features as the
+//! binary) so that its tests run with the library's and the binary needs no test harness.
 //!
 //! `.cargo/config.toml` builds for the CPU of the machine that compiles (`target-cpu=native`):
 //! AVX2 and FMA on any x86-64 CPU of the last decade, AVX-512 where the CPU has it. A binary
