@@ -2,7 +2,8 @@
 # Reproduces the bundled model assets/model/hf2vad_ad_compact.safetensors: generates the
 # normal-driving training scenarios and the validation scenarios (sudden braking, never the
 # test preset), trains the compact HF²-VAD_AD on the former with `vadscope train` in six
-# runs, keeping the epochs of runs 3 and 6 by their frame AUROC on the latter, and copies
+# runs, keeping the epochs of runs 3 and 6 by their frame AUROC on the latter (run 6's
+# candidates from its 11th epoch on being the running average of the weights), and copies
 # the final checkpoint here. MODEL.md records
 # the runs, their wall times and what the model detects. Each step's start is logged with
 # its time, so the wall times can be read off the output.
@@ -48,10 +49,10 @@ step "run 4: one more stage-1 epoch at a lower learning rate (3e-4), one thread"
 step "run 5: the flows named in pixels of a 768-wide frame (the training frames' width), so scoring rescales the flows of frames of other widths; cubes and statistics unchanged"
 "$vadscope" train "${common[@]}" --out "$work/run5" --init "$work/run4/model.safetensors" \
   --epochs 0 --flow-units frame-width
-step "run 6: stage 1 for 20 more epochs at 3e-4 on both sets (96 scenarios, 8,960 training cubes), one thread, every second epoch judged; statistics as tail tables per band"
+step "run 6: stage 1 for 20 more epochs at 3e-4 on both sets (96 scenarios, 8,960 training cubes), one thread, the weights of epochs 11 on averaged, every second epoch judged; statistics as tail tables per band"
 "$vadscope" train --data "$work/train" "$work/train2" --seed 0 --frame-stride 3 \
   --out "$work/run6" --init "$work/run5/model.safetensors" --stage memae --memae-epochs 20 \
   --batch 32 --memae-lr 3e-4 --score-bands 5 --score-scale tail --threads 1 \
-  --select-on "$work/val" --select-every 2 --select-threads 2
+  --select-on "$work/val" --select-every 2 --select-threads 2 --average-from 11
 cp "$work/run6/model.safetensors" "$here/hf2vad_ad_compact.safetensors"
 step "done: $here/hf2vad_ad_compact.safetensors"
