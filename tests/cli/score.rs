@@ -1,7 +1,8 @@
 //! `vadscope score` and `vadscope eval` through the binary, on a tiny generated data set (a
 //! normal and a braking scenario at 96×64) and a tiny random checkpoint made here: caches
-//! appear and are reused, the tables have the rows asked for, and bad inputs fail with a
-//! message that names the culprit.
+//! appear and are reused (also when two processes score the same scenarios at once), the
+//! tables have the rows asked for, and bad inputs fail with a message that names the
+//! culprit.
 
 use std::path::{Path, PathBuf};
 
@@ -182,6 +183,49 @@ fn score_writes_caches_and_a_second_run_reuses_them() {
             .any(|e| e.unwrap().file_name().to_string_lossy().starts_with('.')),
         "no temporary file is left behind"
     );
+}
+
+#[test]
+fn two_processes_scoring_the_same_scenarios_leave_complete_caches() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = tiny_checkpoint(dir.path());
+    let data = dataset(dir.path());
+    let (data_s, model_s) = (data.to_str().unwrap(), model.to_str().unwrap());
+    let args = [
+        "score", data_s, "--model", model_s, "--boxes", "gt", "--force",
+    ];
+    // Both started before either can finish: each writes its own temporary files and
+    // renames them over the same cache names.
+    let spawn = || {
+        std::process::Command::new(env!("CARGO_BIN_EXE_vadscope"))
+            .args(args)
+            .env_remove("VADSCOPE_MODEL")
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("the vadscope binary runs")
+    };
+    let (first, second) = (spawn(), spawn());
+    for process in [first, second] {
+        let out = process.wait_with_output().expect("finishes");
+        let stdout = text(&out.stdout);
+        assert!(out.status.success(), "{stdout}\n{}", text(&out.stderr));
+        assert_eq!(stdout.matches(": scored ").count(), 2, "{stdout}");
+    }
+    let files = cache_files(&data);
+    assert_eq!(files.len(), 2, "one cache per scenario: {files:?}");
+    for file in &files {
+        let cache = ScoreCache::open(file).expect("a complete cache");
+        assert_eq!(cache.table().frames.len(), FRAMES);
+        let leftovers: Vec<_> = std::fs::read_dir(file.parent().unwrap())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|name| name.starts_with('.'))
+            .collect();
+        assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+    }
+    let again = succeed(&["score", data_s, "--model", model_s, "--boxes", "gt"]);
+    assert_eq!(again.matches("cache is current").count(), 2, "{again}");
 }
 
 #[test]
