@@ -15,7 +15,7 @@ use super::ground_truth::ground_truth_labels;
 use super::journal::{JournalRecord, Step, read_journal};
 use super::labels::LabelSet;
 use super::lane::LabelLane;
-use super::writer::{JOURNAL_FILE, JournalWriter, LABELS_FILE};
+use super::writer::{JOURNAL_FILE, JournalWriter, LABELS_FILE, lock_journal};
 
 /// When an edit is on disk.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -68,7 +68,9 @@ impl Editor {
 
     /// Opens the label files in `dir` for a scenario with these frame ids: reads
     /// `labels.json` (or, when there is none, takes `base()` and saves it), replays the
-    /// journal records it does not include, and starts the writer. Damaged files are
+    /// journal records it does not include, and starts the writer, which holds the lock on
+    /// the journal: while it lives, opening the same labels elsewhere fails with
+    /// [`AnnotateError::Busy`]. Damaged files are
     /// reported ([`Editor::load_problems`]), copied aside ([`Editor::set_aside`]) and
     /// replaced by a compacted `labels.json` holding everything that could be read.
     pub fn open_in(
@@ -77,6 +79,9 @@ impl Editor {
         base: impl FnOnce() -> (LabelSet, Vec<AnnotateError>),
     ) -> Result<Self, AnnotateError> {
         std::fs::create_dir_all(dir).map_err(|e| AnnotateError::io(dir, e))?;
+        // Locked before anything is read, so a second editor reads nothing it could
+        // overwrite.
+        let journal_file = lock_journal(dir)?;
         let labels_path = dir.join(LABELS_FILE);
         let journal_path = dir.join(JOURNAL_FILE);
         let mut problems = Vec::new();
@@ -120,7 +125,7 @@ impl Editor {
             editor.set_aside.push(copy_aside(path)?);
         }
         editor.problems = problems;
-        editor.writer = Some(JournalWriter::start(dir, editor.seq)?);
+        editor.writer = Some(JournalWriter::start(dir, journal_file, editor.seq)?);
         editor.dir = Some(dir.to_path_buf());
         if fresh || !damaged.is_empty() {
             editor.compact()?;

@@ -42,6 +42,16 @@ pub enum AnnotateError {
         /// What is wrong, in words.
         problem: String,
     },
+    /// The labels are open for editing in another process (a viewer or `vadscope
+    /// labels`); nothing was read or changed.
+    #[error(
+        "{path}: these labels are being edited by another vadscope process (a viewer or \
+         `vadscope labels`); close them there first"
+    )]
+    Busy {
+        /// The locked journal.
+        path: PathBuf,
+    },
     /// The background journal writer failed or is gone; the edits are applied in memory
     /// and kept for the next attempt.
     #[error("saving labels to {path} failed: {problem}")]

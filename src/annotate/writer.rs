@@ -2,7 +2,8 @@
 //! records (several queued records share one fsync), writes `labels.json` atomically
 //! (temporary file, fsync, rename, fsync of the folder) and then empties the journal. The
 //! caller only sends; [`JournalWriter::flush`] waits until everything sent is on disk.
-//! A failed write keeps its records and is retried with the next message.
+//! A failed write keeps its records and is retried with the next message. The journal's
+//! lock ([`lock_journal`]) keeps a second process from editing the same labels.
 
 use std::fs::{File, OpenOptions};
 use std::io::Write;
@@ -39,11 +40,11 @@ pub struct JournalWriter {
 }
 
 impl JournalWriter {
-    /// Starts the writer for the files in `dir`; `saved_seq` is the last record already
-    /// on disk.
-    pub fn start(dir: &Path, saved_seq: u64) -> Result<Self, AnnotateError> {
+    /// Starts the writer for the files in `dir`, appending to `file`, the journal as
+    /// [`lock_journal`] opened it (the writer keeps its lock); `saved_seq` is the last record
+    /// already on disk.
+    pub fn start(dir: &Path, file: File, saved_seq: u64) -> Result<Self, AnnotateError> {
         let journal = dir.join(JOURNAL_FILE);
-        let file = open_journal(&journal)?;
         let good_len = file
             .metadata()
             .map_err(|e| AnnotateError::io(&journal, e))?
@@ -131,12 +132,24 @@ impl Drop for JournalWriter {
     }
 }
 
-fn open_journal(path: &Path) -> Result<File, AnnotateError> {
-    OpenOptions::new()
+/// Opens the journal in `dir` for appending and takes the exclusive lock that marks the
+/// scenario's labels as being edited, so that two processes never edit them at once (the
+/// second would overwrite the first one's `labels.json` and lose its edits). The lock lasts
+/// as long as the file stays open and the operating system drops it when the process ends,
+/// however it ends, so a killed editor never leaves the labels locked. The journal is
+/// emptied in place, never replaced, so the lock stays with it.
+pub fn lock_journal(dir: &Path) -> Result<File, AnnotateError> {
+    let path = dir.join(JOURNAL_FILE);
+    let file = OpenOptions::new()
         .create(true)
         .append(true)
-        .open(path)
-        .map_err(|e| AnnotateError::io(path, e))
+        .open(&path)
+        .map_err(|e| AnnotateError::io(&path, e))?;
+    match file.try_lock() {
+        Ok(()) => Ok(file),
+        Err(std::fs::TryLockError::WouldBlock) => Err(AnnotateError::Busy { path }),
+        Err(std::fs::TryLockError::Error(e)) => Err(AnnotateError::io(&path, e)),
+    }
 }
 
 struct WriterState {

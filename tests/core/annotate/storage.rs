@@ -1,12 +1,15 @@
 //! Crash-safe saving: the journal is replayed on open, a SIGKILL in the middle of a burst
 //! of edits loses no acknowledged edit, damaged `labels.json` and journals are reported,
-//! copied aside and their readable part kept, and the scenario's files are never touched.
+//! copied aside and their readable part kept, the scenario's files are never touched, and a
+//! second editor of the same labels is refused while the first holds them.
 
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-use vadscope::annotate::{Edit, Editor, IntervalId, JOURNAL_FILE, LABELS_FILE, LabelSet, SaveMode};
+use vadscope::annotate::{
+    AnnotateError, Edit, Editor, IntervalId, JOURNAL_FILE, LABELS_FILE, LabelSet, SaveMode,
+};
 use vadscope::sequence::Scenario;
 
 use crate::support::annotate::{add_interval, write_scenario};
@@ -94,12 +97,42 @@ fn background_saving_is_on_disk_after_flush() {
     editor.flush().expect("flush");
     assert_eq!(editor.saved_seq(), editor.seq());
     let expected = editor.labels().clone();
+    // Without the writer's shutdown (as if the process died here), the files on disk hold
+    // every edit. The forgotten editor keeps its lock in this process, so the files are
+    // read from a copy of the scenario.
     std::mem::forget(editor);
+    let copy_dir = tempfile::tempdir().expect("temp dir");
+    let copy = write_scenario(copy_dir.path());
+    std::fs::create_dir_all(labels_dir(&copy)).expect("labels folder");
+    for file in [LABELS_FILE, JOURNAL_FILE] {
+        std::fs::copy(labels_dir(&root).join(file), labels_dir(&copy).join(file)).expect("copy");
+    }
     assert_eq!(
-        open(&root).labels(),
+        open(&copy).labels(),
         &expected,
         "on disk without the writer's shutdown"
     );
+}
+
+#[test]
+fn a_second_editor_of_the_same_labels_is_refused_until_the_first_closes() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let root = write_scenario(dir.path());
+    let mut first = open(&root);
+    first.apply(add_interval(900, 1, 3)).expect("apply");
+    let Err(err) = Editor::open(&Scenario::open(&root).expect("scenario")) else {
+        panic!("a second editor of the same labels was opened");
+    };
+    assert!(matches!(err, AnnotateError::Busy { .. }), "{err}");
+    let message = err.to_string();
+    assert!(
+        message.contains(JOURNAL_FILE) && message.contains("another vadscope process"),
+        "{message}"
+    );
+    // The refused editor changed nothing: the first one's edit is what reopening finds.
+    let expected = first.labels().clone();
+    drop(first);
+    assert_eq!(open(&root).labels(), &expected);
 }
 
 #[test]
