@@ -146,9 +146,10 @@ pub fn lock_journal(dir: &Path) -> Result<File, AnnotateError> {
         .open(&path)
         .map_err(|e| AnnotateError::io(&path, e))?;
     match file.try_lock() {
-        Ok(()) => Ok(file),
         Err(std::fs::TryLockError::WouldBlock) => Err(AnnotateError::Busy { path }),
-        Err(std::fs::TryLockError::Error(e)) => Err(AnnotateError::io(&path, e)),
+        // A filesystem without locks (some network shares) still lets the labels be
+        // edited, unguarded, rather than not at all.
+        Ok(()) | Err(std::fs::TryLockError::Error(_)) => Ok(file),
     }
 }
 
