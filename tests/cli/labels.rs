@@ -1,6 +1,10 @@
-//! `vadscope labels` end to end: show, export then import, and clear errors.
+//! `vadscope labels` end to end: show, export then import, clear errors, and labels another
+//! process holds refused.
 
 use std::process::Output;
+
+use vadscope::annotate::Editor;
+use vadscope::sequence::Scenario;
 
 use crate::support::annotate::write_scenario;
 use crate::support::cli::{text, vadscope};
@@ -49,6 +53,25 @@ fn labels_command_shows_exports_imports_and_reports_errors() {
         let message = text(&failed.stderr);
         assert!(message.contains(needle), "{args:?}: {message}");
     }
+}
+
+#[test]
+fn labels_held_by_another_process_are_refused_with_a_message() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let root = write_scenario(dir.path());
+    let scenario = root.to_str().expect("utf-8 path");
+    // This test process holds the labels open, as a viewer would.
+    let holder = Editor::open(&Scenario::open(&root).expect("scenario")).expect("labels");
+    let refused = labels(&[scenario, "--show"]);
+    assert!(!refused.status.success());
+    let message = text(&refused.stderr);
+    assert!(
+        message.contains("labels.journal") && message.contains("another vadscope process"),
+        "{message}"
+    );
+    drop(holder);
+    let shown = labels(&[scenario, "--show"]);
+    assert!(shown.status.success(), "{}", text(&shown.stderr));
 }
 
 #[test]
