@@ -434,7 +434,7 @@ impl Context<'_> {
             let train_loss = loss_sum / seen.max(1) as f64;
             // From the averaging's first epoch on, the candidate of each epoch is the
             // running mean of the weights; training goes on from the epoch's own.
-            let averaged_model = match averaging.filter(|a| a.includes(epoch)) {
+            let (averaged_model, averaged) = match averaging.filter(|a| a.includes(epoch)) {
                 Some(averaging) => {
                     let folded = match average.take() {
                         None => RunningAverage::start(&model),
@@ -442,15 +442,12 @@ impl Context<'_> {
                     };
                     let prepared = self.prepare_average(&folded, averaging, stage);
                     save_model(&prepared, &self.out_dir.join(AVERAGE_MODEL))?;
+                    let count = folded.count();
                     average = Some(folded.with_weights(&prepared));
-                    Some(prepared)
+                    (Some(prepared), count)
                 }
-                None => None,
+                None => (None, 0),
             };
-            let averaged = average
-                .as_ref()
-                .filter(|_| averaged_model.is_some())
-                .map_or(0, RunningAverage::count);
             let candidate_model = averaged_model.as_ref().unwrap_or(&model);
             let val_loss = self.validation_loss(stage, candidate_model);
             let rating = match (self.train_config.anomaly_selection, judge.as_deref_mut()) {
