@@ -250,9 +250,6 @@ impl Scorer {
             &CANCEL,
         );
         bar.finish_and_clear();
-        // The scored frames are not needed again before the scenario's next pass, and a
-        // run over many scenarios would otherwise keep each one's decoded frames.
-        scenario.release_decoded();
         let cache = cache.with_context(|| {
             format!(
                 "scoring {} with {}",

@@ -63,7 +63,9 @@ impl Scorer {
     }
 
     /// Scores `scenario` for `request` now, loading the model unless it is loaded already;
-    /// `progress` is called after each batch and `cancel` is checked between batches.
+    /// `progress` is called after each batch and `cancel` is checked between batches. The
+    /// scenario's decoded frames are let go afterwards, scored or not: a caller going through
+    /// many scenarios would otherwise keep each one's ([`Scenario::release_decoded`]).
     pub fn score(
         &mut self,
         scenario: &Scenario,
@@ -73,6 +75,8 @@ impl Scorer {
     ) -> Result<ScoreCache, ScoreError> {
         let key = self.key;
         let detector = self.load_model()?;
-        score_scenario(scenario, detector, key, request, progress, cancel)
+        let scored = score_scenario(scenario, detector, key, request, progress, cancel);
+        scenario.release_decoded();
+        scored
     }
 }
