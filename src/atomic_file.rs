@@ -3,7 +3,7 @@
 //! that leftovers name the process that wrote them), which is flushed to disk and renamed
 //! over the target; the folder is then flushed so that the rename itself survives. This is
 //! how vadscope writes every file its user would miss: labels, failure tags, checkpoints,
-//! training state, flow and score caches.
+//! training state, flow and score caches, exported frames.
 
 use std::fs::{File, OpenOptions};
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};
@@ -181,10 +181,17 @@ fn temporary_path(target: &Path) -> PathBuf {
     target.with_file_name(format!(".{name}.{}{TEMPORARY_SUFFIX}", std::process::id()))
 }
 
-/// The process id in a temporary file name `.<name>.<pid>.tmp`.
+/// The process id in a temporary file name: ours, `.<name>.<pid>.tmp`, or the scratch file
+/// a burn store writes beside the path it is given, `<path>.<pid>-<n>.tmp` (with our
+/// temporary path, `.<name>.<pid>.tmp.<pid>-<n>.tmp`), which a kill mid-save strands too.
 fn temporary_owner(name: &str) -> Option<u32> {
     let stem = name.strip_prefix('.')?.strip_suffix(TEMPORARY_SUFFIX)?;
-    stem.rsplit('.').next()?.parse().ok()
+    let owner = stem.rsplit('.').next()?;
+    owner
+        .split_once('-')
+        .map_or(owner, |(pid, _)| pid)
+        .parse()
+        .ok()
 }
 
 /// Renames `temporary` over `target` and flushes their folder.
@@ -214,6 +221,11 @@ mod tests {
         assert_eq!(temporary_owner(".OPTICAL_FLOW_7.png.4242.tmp"), Some(4242));
         assert_eq!(temporary_owner("OPTICAL_FLOW_7.png"), None);
         assert_eq!(temporary_owner(".OPTICAL_FLOW_7.png.tmp"), None);
+        assert_eq!(
+            temporary_owner(".last_model.bpk.31425.tmp.31425-4.tmp"),
+            Some(31425)
+        );
+        assert_eq!(temporary_owner(".notes.txt.draft-2.tmp"), None);
     }
 
     #[test]

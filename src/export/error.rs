@@ -62,6 +62,12 @@ pub enum ExportError {
     },
 }
 
+impl From<crate::atomic_file::WriteError> for ExportError {
+    fn from(e: crate::atomic_file::WriteError) -> Self {
+        Self::io(e.path, e.source)
+    }
+}
+
 impl ExportError {
     /// An I/O error on `path`.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {

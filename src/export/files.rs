@@ -1,14 +1,19 @@
 //! The files of an export: PNG images, streamed animated GIFs, `scores.csv`, and the
 //! frame range clipped to the scenario.
+//!
+//! Every file is written atomically ([`crate::atomic_file`]): a process killed mid-export
+//! leaves whole files and hidden temporaries, never a truncated image under its final name.
 
-use std::fs::File;
-use std::io::BufWriter;
+use std::cell::RefCell;
+use std::io::{self, Cursor, Write};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
+use std::rc::Rc;
 
 use image::codecs::gif::{GifEncoder, Repeat};
-use image::{Delay, Frame, RgbaImage};
+use image::{Delay, Frame, ImageFormat, RgbaImage};
 
+use crate::atomic_file::{AtomicFile, write_atomically};
 use crate::render::{Provenance, scores_csv};
 use crate::score::ScoreSeries;
 use crate::score::ScoreTable;
@@ -19,12 +24,16 @@ use super::ExportError;
 /// Time each frame of an exported GIF is shown (10 frames/s).
 pub const GIF_FRAME_MS: u32 = 100;
 
-/// Writes `image` as PNG at `path`.
+/// Writes `image` as PNG at `path`, atomically.
 pub fn write_png(image: &RgbaImage, path: &Path) -> Result<(), ExportError> {
-    image.save(path).map_err(|source| ExportError::Image {
-        path: path.to_path_buf(),
-        source,
-    })
+    let mut bytes = Vec::new();
+    image
+        .write_to(&mut Cursor::new(&mut bytes), ImageFormat::Png)
+        .map_err(|source| ExportError::Image {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    Ok(write_atomically(path, &bytes)?)
 }
 
 /// Writes the `scores.csv` of `series` (fused from `table`) with its provenance header.
@@ -34,8 +43,10 @@ pub fn write_scores_csv(
     series: &ScoreSeries,
     provenance: &Provenance,
 ) -> Result<(), ExportError> {
-    std::fs::write(path, scores_csv(table, series, provenance))
-        .map_err(|e| ExportError::io(path, e))
+    Ok(write_atomically(
+        path,
+        scores_csv(table, series, provenance).as_bytes(),
+    )?)
 }
 
 /// The frames of `range` clipped to the scenario (all of them for `None`); an error when
@@ -62,17 +73,34 @@ pub fn frames_in(
 }
 
 /// An endlessly looping animated GIF at 10 frames/s, written frame by frame (nothing is
-/// held in memory but the encoder's state).
+/// held in memory but the encoder's state) to a temporary file that replaces `path` only
+/// on [`GifWriter::finish`]; dropped unfinished, it leaves any earlier file at `path` alone.
 pub struct GifWriter {
     path: PathBuf,
-    encoder: GifEncoder<BufWriter<File>>,
+    file: Rc<RefCell<AtomicFile>>,
+    encoder: Option<GifEncoder<SharedFile>>,
+}
+
+/// The GIF's file, shared between the encoder, which writes the GIF trailer when it is
+/// dropped, and the writer, which commits the file after that.
+struct SharedFile(Rc<RefCell<AtomicFile>>);
+
+impl Write for SharedFile {
+    fn write(&mut self, bytes: &[u8]) -> io::Result<usize> {
+        self.0.borrow_mut().write(bytes)
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.0.borrow_mut().flush()
+    }
 }
 
 impl GifWriter {
-    /// Creates the file at `path`.
+    /// Starts the file that will live at `path`.
     pub fn create(path: &Path) -> Result<Self, ExportError> {
-        let file = File::create(path).map_err(|e| ExportError::io(path, e))?;
-        let mut encoder = GifEncoder::new_with_speed(BufWriter::new(file), 10);
+        let file = AtomicFile::create(path)?;
+        let file = Rc::new(RefCell::new(file));
+        let mut encoder = GifEncoder::new_with_speed(SharedFile(Rc::clone(&file)), 10);
         encoder
             .set_repeat(Repeat::Infinite)
             .map_err(|source| ExportError::Image {
@@ -81,7 +109,8 @@ impl GifWriter {
             })?;
         Ok(Self {
             path: path.to_path_buf(),
-            encoder,
+            file,
+            encoder: Some(encoder),
         })
     }
 
@@ -93,7 +122,10 @@ impl GifWriter {
             0,
             Delay::from_numer_denom_ms(GIF_FRAME_MS, 1),
         );
-        self.encoder
+        let encoder = self.encoder.as_mut().ok_or_else(|| {
+            ExportError::io(&self.path, io::Error::other("the GIF was already finished"))
+        })?;
+        encoder
             .encode_frame(frame)
             .map_err(|source| ExportError::Image {
                 path: self.path.clone(),
@@ -104,5 +136,17 @@ impl GifWriter {
     /// The file being written.
     pub fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// Ends the GIF after the frames pushed so far and puts it in place at [`Self::path`].
+    pub fn finish(mut self) -> Result<(), ExportError> {
+        // The encoder writes the GIF trailer when it is dropped.
+        drop(self.encoder.take());
+        let file = Rc::try_unwrap(self.file)
+            .map_err(|_| {
+                ExportError::io(&self.path, io::Error::other("the GIF file is still shared"))
+            })?
+            .into_inner();
+        Ok(file.commit()?)
     }
 }

@@ -9,6 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use image::RgbaImage;
 
+use crate::atomic_file::remove_stale_temporaries;
 use crate::render::{
     DashboardInput, DashboardOptions, DrawSettings, FrameScene, FrameView, Provenance, ScoreLabels,
     TimelineInput, draw_frame_view,
@@ -229,6 +230,8 @@ pub fn export_frames(
     };
     for dir in [&request.out, &png_dir] {
         std::fs::create_dir_all(dir).map_err(|e| ExportError::io(dir, e))?;
+        // What an export killed mid-file left behind.
+        remove_stale_temporaries(dir);
     }
     let mut summary = ExportSummary::default();
     let mut gifs = Vec::new();
@@ -263,10 +266,10 @@ pub fn export_frames(
             frames_total: total,
         });
     }
-    summary
-        .files
-        .extend(gifs.iter().map(|g| g.path().to_path_buf()));
-    drop(gifs);
+    for gif in gifs {
+        summary.files.push(gif.path().to_path_buf());
+        gif.finish()?;
+    }
     if cancelled {
         return Err(ExportError::Cancelled {
             written: summary.files.len(),

@@ -11,6 +11,7 @@ pub mod error;
 mod measure;
 mod model_files;
 pub mod progress;
+mod run_state;
 pub mod scenarios;
 pub mod selection;
 pub mod stages;

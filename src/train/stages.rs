@@ -20,9 +20,8 @@ use std::path::Path;
 use burn::module::Module;
 use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
 use burn::tensor::{Device, Tensor};
-use serde::{Deserialize, Serialize};
 
-use crate::atomic_file::{write_atomically, write_atomically_with};
+use crate::atomic_file::{remove_stale_temporaries, write_atomically_with};
 use crate::model::inference::to_model_conventions;
 use crate::model::layers::tensor;
 use crate::model::losses::{stage1_loss, stage2_loss, stage3_loss};
@@ -36,29 +35,9 @@ use super::model_files::{
     AVERAGE_MODEL, FINAL, LAST_MODEL, LAST_OPTIM, best_file, initial_model, load_model, save_model,
 };
 use super::progress::{StageSummary, TrainEvent, TrainReport};
+use super::run_state::{TrainState, commit_epoch, recover_state, staged, write_state};
 use super::selection::EpochJudge;
 
-/// Persistent progress of a run (`state.json`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-struct TrainState {
-    model_config: ModelConfig,
-    train_config: TrainConfig,
-    cubes: usize,
-    stage: usize,
-    next_epoch: usize,
-    best_loss: Option<f64>,
-    best_epoch: usize,
-    /// Epochs averaged into the kept model (0: its own epoch's weights).
-    #[serde(default)]
-    best_averaged: usize,
-    /// Epochs in the running weight average (`AVERAGE_MODEL`) of the current stage.
-    #[serde(default)]
-    averaged: usize,
-    rng_state: u64,
-    summaries: [Option<StageSummary>; 3],
-}
-
-const STATE: &str = "state.json";
 /// Trains a model of `model_config` on the normal cubes `data` through the three stages,
 /// writing checkpoints to `out_dir` and resuming from them when the folder holds an
 /// unfinished run of the same configuration. The weights start from the seeded random
@@ -131,10 +110,12 @@ pub fn train_judged(
         _ => {}
     }
     std::fs::create_dir_all(out_dir).map_err(|e| TrainError::io(out_dir, e))?;
+    // Checkpoints half-written by a run that was killed.
+    remove_stale_temporaries(out_dir);
     let (train_idx, val_idx) = data.split(train_config.val_fraction, train_config.seed);
     let device = Device::flex().autodiff();
 
-    let mut state = match read_state(out_dir)? {
+    let mut state = match recover_state(out_dir)? {
         Some(state) => {
             if state.model_config != *model_config
                 || state.train_config != *train_config
@@ -160,6 +141,7 @@ pub fn train_judged(
             averaged: 0,
             rng_state: NoiseRng::new(train_config.seed ^ 0x5EED).state(),
             summaries: [None, None, None],
+            pending: Vec::new(),
         },
     };
 
@@ -308,23 +290,6 @@ fn prepare_for_stage(mut model: Hf2Vad, stage: usize) -> Hf2Vad {
     model
 }
 
-fn read_state(dir: &Path) -> Result<Option<TrainState>, TrainError> {
-    let path = dir.join(STATE);
-    if !path.is_file() {
-        return Ok(None);
-    }
-    let text = std::fs::read_to_string(&path).map_err(|e| TrainError::io(&path, e))?;
-    serde_json::from_str(&text)
-        .map(Some)
-        .map_err(|e| TrainError::file(&path, format!("unreadable training state: {e}")))
-}
-
-fn write_state(dir: &Path, state: &TrainState) -> Result<(), TrainError> {
-    let path = dir.join(STATE);
-    let text = serde_json::to_string_pretty(state).map_err(|e| TrainError::io(&path, e))?;
-    Ok(write_atomically(&path, text.as_bytes())?)
-}
-
 /// Scalar value of a loss tensor.
 pub(super) fn scalar(t: Tensor<1>) -> f64 {
     t.into_scalar::<f32>() as f64
@@ -408,6 +373,8 @@ impl Context<'_> {
             _ => None,
         };
         for epoch in state.next_epoch..settings.epochs {
+            // The files this epoch replaces, committed with the state at its end.
+            let mut epoch_files = Vec::new();
             let lr = settings.schedule.rate(settings.lr, epoch);
             let mut order = self.train_idx.to_vec();
             rng.shuffle(&mut order);
@@ -441,7 +408,8 @@ impl Context<'_> {
                         Some(mean) => mean.fold_in(&model)?,
                     };
                     let prepared = self.prepare_average(&folded, averaging, stage);
-                    save_model(&prepared, &self.out_dir.join(AVERAGE_MODEL))?;
+                    save_model(&prepared, &staged(self.out_dir, AVERAGE_MODEL))?;
+                    epoch_files.push(AVERAGE_MODEL.to_string());
                     let count = folded.count();
                     average = Some(folded.with_weights(&prepared));
                     (Some(prepared), count)
@@ -466,14 +434,16 @@ impl Context<'_> {
                 state.best_loss = Some(value);
                 state.best_epoch = epoch;
                 state.best_averaged = averaged;
-                save_model(candidate_model, &self.out_dir.join(best_file(stage)))?;
+                save_model(candidate_model, &staged(self.out_dir, &best_file(stage)))?;
+                epoch_files.push(best_file(stage));
             }
-            save_model(&model, &self.out_dir.join(LAST_MODEL))?;
-            write_atomically_with(&self.out_dir.join(LAST_OPTIM), |scratch| {
+            save_model(&model, &staged(self.out_dir, LAST_MODEL))?;
+            write_atomically_with(&staged(self.out_dir, LAST_OPTIM), |scratch| {
                 optim
                     .save(scratch)
                     .map_err(|e| TrainError::file(scratch, e))
             })?;
+            epoch_files.extend([LAST_MODEL.to_string(), LAST_OPTIM.to_string()]);
             state.next_epoch = epoch + 1;
             state.averaged = averaged;
             state.rng_state = rng.state();
@@ -491,7 +461,7 @@ impl Context<'_> {
                     .map(|value| -value),
                 last_train_loss: train_loss,
             });
-            write_state(self.out_dir, state)?;
+            commit_epoch(self.out_dir, state, epoch_files)?;
             on_event(&TrainEvent::EpochDone {
                 stage,
                 epoch,

@@ -8,6 +8,7 @@ mod support;
 mod bundled_model;
 mod flow;
 mod generate;
+mod kills;
 mod labels;
 mod render;
 mod score;

@@ -17,12 +17,12 @@ use crate::support::app::generate_dataset;
 use crate::support::cli::{text, vadscope};
 use crate::support::model::tiny_config;
 
-fn path(p: &Path) -> &str {
+pub(crate) fn path(p: &Path) -> &str {
     p.to_str().expect("utf-8 temp path")
 }
 
 /// Two 10-frame 96×64 normal-driving scenarios in `dir`, with `extra` generator options.
-fn generate(dir: &Path, extra: &[&str]) {
+pub(crate) fn generate(dir: &Path, extra: &[&str]) {
     let mut args = vec![
         "generate",
         "--out",
@@ -45,7 +45,7 @@ fn generate(dir: &Path, extra: &[&str]) {
 
 /// Writes a tiny model config (16×16 cubes, 4 base features, 8 memory slots) beside `dir`'s
 /// other files and returns its path.
-fn tiny_model(dir: &Path) -> PathBuf {
+pub(crate) fn tiny_model(dir: &Path) -> PathBuf {
     let config = tiny_config(ModelConfig::compact());
     let file = dir.join("tiny_model.json");
     std::fs::write(&file, serde_json::to_string(&config).unwrap()).unwrap();
@@ -55,7 +55,7 @@ fn tiny_model(dir: &Path) -> PathBuf {
 /// A fast training run: the model of `model` (a config file, or a checkpoint when `extra`
 /// holds `--init`), a few steps of 8 cubes per epoch, learning rates high enough to move in
 /// a few steps.
-fn tiny(data: &Path, out: &Path, model: Option<&Path>, extra: &[&str]) -> Vec<String> {
+pub(crate) fn tiny(data: &Path, out: &Path, model: Option<&Path>, extra: &[&str]) -> Vec<String> {
     let mut args: Vec<String> = [
         "train",
         "--data",

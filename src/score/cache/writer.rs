@@ -4,7 +4,7 @@
 use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
-use crate::atomic_file::AtomicFile;
+use crate::atomic_file::{AtomicFile, remove_stale_temporaries};
 use crate::fnv::fnv1a64;
 
 use super::super::ScoreError;
@@ -30,6 +30,8 @@ impl CacheWriter {
         }
         let dir = path.parent().unwrap_or(Path::new("."));
         std::fs::create_dir_all(dir).map_err(|e| ScoreError::io(dir, e))?;
+        // Caches half-written by a scorer that was killed.
+        remove_stale_temporaries(dir);
         let mut file = AtomicFile::with_capacity(path, 1 << 20)?;
         file.write_all(&[0u8; PREAMBLE_LEN as usize])
             .map_err(|e| ScoreError::io(file.temporary_path(), e))?;
