@@ -7,6 +7,7 @@ mod support;
 
 mod bundled_model;
 mod flow;
+mod full_disk;
 mod generate;
 mod kills;
 mod labels;
