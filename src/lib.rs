@@ -5,6 +5,7 @@
 //! one-way data flow.
 
 pub mod annotate;
+#[cfg(feature = "viewer")]
 pub mod app;
 pub mod atomic_file;
 pub mod box_crop;

@@ -189,6 +189,19 @@ fn one_band() -> usize {
 /// Most score bands a model may use.
 pub const MAX_SCORE_BANDS: usize = 16;
 
+/// Upper bounds on the sizes a config may ask for. A checkpoint's config comes from a file
+/// that may not be ours: these refuse one that would make the model's construction allocate
+/// without bound (the paper's sizes are 32, 4, 32, 2,000 and 64, far inside).
+pub const MAX_PATCH_SIZE: usize = 256;
+/// Most past frames (and flows) a cube may hold.
+pub const MAX_CLIP_HIST: usize = 16;
+/// Most base features of ML-MemAE-SC, and of the CVAE's first stage.
+pub const MAX_FEATURES: usize = 1024;
+/// Most memory slots per level.
+pub const MAX_SLOTS: usize = 65_536;
+/// Most trainable parameters (1 GB of `f32`).
+pub const MAX_PARAMETERS: usize = 250_000_000;
+
 impl ModelConfig {
     /// The reference configuration, spec Part B exactly (69.2 M parameters, ≈2.1 GMAC per
     /// cube).
@@ -315,6 +328,17 @@ impl ModelConfig {
                 self.patch_size
             ));
         }
+        for (name, value, limit) in [
+            ("patch_size", self.patch_size, MAX_PATCH_SIZE),
+            ("clip_hist", self.clip_hist, MAX_CLIP_HIST),
+            ("feature_root", self.feature_root, MAX_FEATURES),
+            ("nf_start", self.nf_start, MAX_FEATURES),
+            ("num_slots", self.num_slots, MAX_SLOTS),
+        ] {
+            if value > limit {
+                return bad(format!("{name} {value} exceeds the limit of {limit}"));
+            }
+        }
         if self.clip_hist == 0 || self.num_flows != self.clip_hist {
             return bad(format!(
                 "num_flows ({}) must equal clip_hist ({}) and be positive: the reference \
@@ -351,6 +375,13 @@ impl ModelConfig {
         }
         if self.conventions.flow_units == (FlowUnits::FrameWidth { width: 0 }) {
             return bad("the flows' reference frame width must be positive".into());
+        }
+        // Within the limits above the count cannot overflow.
+        let parameters = self.parameter_count();
+        if parameters > MAX_PARAMETERS {
+            return bad(format!(
+                "{parameters} parameters exceed the limit of {MAX_PARAMETERS}"
+            ));
         }
         self.box_filter.validate()?;
         if !(1..=MAX_SCORE_BANDS).contains(&self.score_bands) {
@@ -460,6 +491,27 @@ mod tests {
         compact.validate().expect("compact config is valid");
         let megabytes = compact.parameter_count() as f64 * 4.0 / 1e6;
         assert!(megabytes <= 60.0, "compact model is {megabytes:.1} MB");
+    }
+
+    #[test]
+    fn configs_that_would_allocate_without_bound_are_refused() {
+        let refused = |edit: &dyn Fn(&mut ModelConfig), needle: &str| {
+            let mut c = ModelConfig::paper();
+            edit(&mut c);
+            match c.validate() {
+                Err(ModelError::InvalidConfig(m)) => assert!(m.contains(needle), "{m}"),
+                other => panic!("{needle}: {other:?}"),
+            }
+        };
+        refused(&|c| c.patch_size = 1 << 20, "patch_size 1048576 exceeds");
+        refused(&|c| c.num_slots = usize::MAX, "num_slots");
+        refused(&|c| c.feature_root = 1 << 40, "feature_root");
+        refused(&|c| (c.clip_hist, c.num_flows) = (1000, 1000), "clip_hist");
+        // Each size within its limit, together too many parameters.
+        refused(
+            &|c| (c.patch_size, c.feature_root, c.num_slots) = (256, 512, 65_536),
+            "parameters exceed",
+        );
     }
 
     #[test]

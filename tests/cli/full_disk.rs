@@ -145,7 +145,11 @@ fn assert_failed_clearly(outcome: &Outcome, mode: Mode) {
         Mode::FileSize => "File too large",
         _ => "No space left on device",
     };
-    assert_eq!(message.matches(cause).count(), 1, "the cause once in: {message}");
+    assert_eq!(
+        message.matches(cause).count(),
+        1,
+        "the cause once in: {message}"
+    );
     assert!(
         message.contains(path(&outcome.root)),
         "no path in: {message}"
