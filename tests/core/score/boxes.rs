@@ -429,3 +429,12 @@ fn motion_and_ground_truth_sources_against_the_ground_truth() {
             .is_empty()
     );
 }
+
+#[test]
+fn a_coco_file_name_names_a_frame_and_is_never_a_path_to_open() {
+    let text = r#"{"images": [{"id": 1, "file_name": "../../../../etc/RGB_IMG_7.png"}],
+        "annotations": [{"image_id": 1, "bbox": [0, 0, 4, 4]}]}"#;
+    let parsed = parse_coco(Path::new("det.json"), text).expect("parses");
+    assert_eq!(parsed.len(), 1);
+    assert_eq!(parsed[0].frame, FrameRef::Stem("RGB_IMG_7".into()));
+}
