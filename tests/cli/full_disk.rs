@@ -9,9 +9,8 @@
 //! (`ulimit -f 0`: the process may create files but not put a byte in them), and the
 //! read-only test is skipped; the tests print which one ran.
 
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Command;
 
 use vadscope::annotate::{Editor, LabelFormat, LabelSet, export_labels};
 use vadscope::sequence::Scenario;
@@ -288,7 +287,7 @@ fn score_and_export_on_a_full_disk_fail_clearly_and_keep_the_earlier_files() {
 
 #[test]
 fn labels_and_training_on_a_full_disk_fail_clearly_and_lose_nothing() {
-    use crate::train::{generate, tiny, tiny_model};
+    use crate::train::{generate, stop_after_first_epoch, tiny, tiny_model};
 
     let mode = full_disk_mode();
     let dir = tempfile::tempdir().unwrap();
@@ -352,24 +351,6 @@ fn labels_and_training_on_a_full_disk_fail_clearly_and_lose_nothing() {
     let trained = run_on(mode, &src, &dir.path().join("train"), &resumed, &[]);
     assert_failed_clearly(&trained, mode);
     assert_unchanged(&src, &trained);
-}
-
-/// Runs `vadscope train` with `args` and kills it once its first epoch is checkpointed.
-fn stop_after_first_epoch(args: &[String]) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_vadscope"))
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("train starts");
-    let stdout = child.stdout.take().expect("piped stdout");
-    let first_epoch = BufReader::new(stdout)
-        .lines()
-        .map_while(Result::ok)
-        .any(|l| l.starts_with("stage 1 memae epoch 1/"));
-    child.kill().expect("kill the run");
-    child.wait().expect("reap the run");
-    assert!(first_epoch, "the run never finished an epoch");
 }
 
 #[test]

@@ -89,6 +89,25 @@ pub(crate) fn tiny(data: &Path, out: &Path, model: Option<&Path>, extra: &[&str]
     args
 }
 
+/// Runs `vadscope train` with `args` (stage 1 first) and kills it as soon as its first
+/// epoch is checkpointed.
+pub(crate) fn stop_after_first_epoch(args: &[String]) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vadscope"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("train starts");
+    let stdout = child.stdout.take().expect("piped stdout");
+    let first_epoch = BufReader::new(stdout)
+        .lines()
+        .map_while(Result::ok)
+        .any(|l| l.starts_with("stage 1 memae epoch 1/"));
+    child.kill().expect("kill the run");
+    child.wait().expect("reap the run");
+    assert!(first_epoch, "the run never finished an epoch");
+}
+
 fn run(args: &[String]) -> Output {
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     vadscope(&args)
@@ -259,21 +278,7 @@ fn an_interrupted_run_resumes_and_a_corrupt_checkpoint_is_reported() {
         &["--stage", "memae", "--epochs", "3"],
     );
 
-    // Stop the run as soon as its first epoch is checkpointed.
-    let mut child = Command::new(env!("CARGO_BIN_EXE_vadscope"))
-        .args(&args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("train starts");
-    let stdout = child.stdout.take().expect("piped stdout");
-    let first_epoch = BufReader::new(stdout)
-        .lines()
-        .map_while(Result::ok)
-        .find(|l| l.starts_with("stage 1 memae epoch 1/3"));
-    child.kill().expect("kill the run");
-    child.wait().expect("reap the run");
-    assert!(first_epoch.is_some(), "the run never finished an epoch");
+    stop_after_first_epoch(&args);
     assert!(!out.join("model.safetensors").exists());
 
     // A damaged checkpoint in a copy of the folder is named in the error.
