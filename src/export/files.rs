@@ -78,7 +78,7 @@ pub fn frames_in(
 pub struct GifWriter {
     path: PathBuf,
     file: Rc<RefCell<AtomicFile>>,
-    encoder: Option<GifEncoder<SharedFile>>,
+    encoder: GifEncoder<SharedFile>,
 }
 
 /// The GIF's file, shared between the encoder, which writes the GIF trailer when it is
@@ -110,7 +110,7 @@ impl GifWriter {
         Ok(Self {
             path: path.to_path_buf(),
             file,
-            encoder: Some(encoder),
+            encoder,
         })
     }
 
@@ -122,10 +122,7 @@ impl GifWriter {
             0,
             Delay::from_numer_denom_ms(GIF_FRAME_MS, 1),
         );
-        let encoder = self.encoder.as_mut().ok_or_else(|| {
-            ExportError::io(&self.path, io::Error::other("the GIF was already finished"))
-        })?;
-        encoder
+        self.encoder
             .encode_frame(frame)
             .map_err(|source| ExportError::Image {
                 path: self.path.clone(),
@@ -139,13 +136,17 @@ impl GifWriter {
     }
 
     /// Ends the GIF after the frames pushed so far and puts it in place at [`Self::path`].
-    pub fn finish(mut self) -> Result<(), ExportError> {
-        // The encoder writes the GIF trailer when it is dropped.
-        drop(self.encoder.take());
-        let file = Rc::try_unwrap(self.file)
-            .map_err(|_| {
-                ExportError::io(&self.path, io::Error::other("the GIF file is still shared"))
-            })?
+    pub fn finish(self) -> Result<(), ExportError> {
+        let Self {
+            path,
+            file,
+            encoder,
+        } = self;
+        // The encoder writes the GIF trailer when it is dropped, and with it goes the
+        // other handle on the file.
+        drop(encoder);
+        let file = Rc::try_unwrap(file)
+            .map_err(|_| ExportError::io(&path, io::Error::other("the GIF file is still shared")))?
             .into_inner();
         Ok(file.commit()?)
     }

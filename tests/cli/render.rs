@@ -141,8 +141,20 @@ fn render_scores_then_writes_every_view_and_a_gif() {
                 path.display()
             );
         }
-        assert!(out.join(format!("{view}.gif")).is_file(), "{view}.gif");
+        // A whole GIF: every frame decodes, at the size asked for.
+        let gif = std::fs::File::open(out.join(format!("{view}.gif"))).expect("{view}.gif");
+        let frames = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(gif))
+            .and_then(|d| image::AnimationDecoder::into_frames(d).collect_frames())
+            .unwrap_or_else(|e| panic!("{view}.gif: {e}"));
+        assert_eq!(frames.len(), 3, "{view}.gif");
+        assert_eq!(frames[0].buffer().dimensions(), (320, 200), "{view}.gif");
     }
+    let leftovers: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
     for name in ["timeline.png", "roc.png", "histogram.png"] {
         assert!(out.join(name).is_file(), "{name}");
     }
