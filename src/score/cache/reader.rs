@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use crate::fnv::fnv1a64;
+use crate::model::config::MAX_PATCH_SIZE;
 use crate::sequence::Scenario;
 
 use super::super::ScoreError;
@@ -83,6 +84,12 @@ impl ScoreCache {
             ));
         }
         let patch = u32_at(12);
+        if patch as usize > MAX_PATCH_SIZE {
+            return Err(ScoreError::cache(
+                path,
+                format!("patch size {patch} exceeds the limit of {MAX_PATCH_SIZE} (corrupt file)"),
+            ));
+        }
         let objects = u64_at(16);
         let maps_offset = u64_at(24);
         let tables_offset = u64_at(32);

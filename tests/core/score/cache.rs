@@ -203,6 +203,15 @@ fn truncated_and_corrupt_files_are_named_errors() {
         "{error}"
     );
 
+    // A header with a valid checksum that claims a patch size no model has: refused
+    // before any size is computed from it.
+    let mut bad = good.clone();
+    bad[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+    let checksum = vadscope::fnv::fnv1a64(&bad[..56]);
+    bad[56..64].copy_from_slice(&checksum.to_le_bytes());
+    std::fs::write(&path, &bad).expect("write");
+    assert_cache_error(&path, "patch size 4294967295");
+
     let missing = dir.path().join("missing.vsc");
     let error = ScoreCache::open(&missing).expect_err("no file").to_string();
     assert!(error.contains("missing.vsc"), "{error}");
