@@ -261,6 +261,31 @@ fn copy_folder(from: &Path, to: &Path) {
     }
 }
 
+/// Runs `command(folder)` to the end on a copy of `data`, then kills it at random moments
+/// on fresh copies (see the module docs); returns the uninterrupted run's files.
+fn kill_on_copies(
+    dir: &Path,
+    data: &Path,
+    seed: u64,
+    what: &str,
+    command: &dyn Fn(&Path) -> Vec<String>,
+) -> BTreeMap<PathBuf, Vec<u8>> {
+    let reference = dir.join("reference");
+    copy_folder(data, &reference);
+    let window = timed(&command(&reference));
+    let expected = everything(&reference);
+    let out = dir.join("out");
+    let kills = KillTest {
+        seed,
+        reset: &mut || copy_folder(data, &out),
+        command: &mut || vadscope_command(&command(&out)),
+        check: &mut |finished| assert_matches(&everything(&out), &expected, finished, what),
+    }
+    .run(window, dir);
+    assert!(kills >= KILLS);
+    expected
+}
+
 #[test]
 fn generate_killed_at_random_moments_resumes_to_the_same_scenarios() {
     let dir = tempfile::tempdir().unwrap();
@@ -293,8 +318,6 @@ fn flow_killed_at_random_moments_finishes_the_same_cache() {
         &["--omit", "flow,depth,instance"],
     ));
     let frames = everything(&data);
-    let reference = dir.path().join("reference");
-    copy_folder(&data, &reference);
     let flow = |root: &Path| {
         vec![
             "flow".to_string(),
@@ -303,19 +326,8 @@ fn flow_killed_at_random_moments_finishes_the_same_cache() {
             "fast".into(),
         ]
     };
-    let args = flow(&reference);
-    let window = timed(&args);
-    let expected = everything(&reference);
+    let expected = kill_on_copies(dir.path(), &data, 2, "flow", &flow);
     assert!(expected.len() > frames.len(), "the reference computed flow");
-    let out = dir.path().join("out");
-    let kills = KillTest {
-        seed: 2,
-        reset: &mut || copy_folder(&data, &out),
-        command: &mut || vadscope_command(&flow(&out)),
-        check: &mut |finished| assert_matches(&everything(&out), &expected, finished, "flow"),
-    }
-    .run(window, dir.path());
-    assert!(kills >= KILLS);
 }
 
 #[test]
@@ -329,8 +341,6 @@ fn score_killed_at_random_moments_finishes_the_same_caches() {
         "96x64",
         &["--omit", "depth,instance"],
     ));
-    let reference = dir.path().join("reference");
-    copy_folder(&data, &reference);
     let score = |root: &Path| {
         vec![
             "score".to_string(),
@@ -341,17 +351,7 @@ fn score_killed_at_random_moments_finishes_the_same_caches() {
             "gt".into(),
         ]
     };
-    let window = timed(&score(&reference));
-    let expected = everything(&reference);
-    let out = dir.path().join("out");
-    let kills = KillTest {
-        seed: 3,
-        reset: &mut || copy_folder(&data, &out),
-        command: &mut || vadscope_command(&score(&out)),
-        check: &mut |finished| assert_matches(&everything(&out), &expected, finished, "score"),
-    }
-    .run(window, dir.path());
-    assert!(kills >= KILLS);
+    kill_on_copies(dir.path(), &data, 3, "score", &score);
 }
 
 #[test]
