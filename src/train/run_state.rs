@@ -52,7 +52,7 @@ pub(super) struct TrainState {
 }
 
 /// Where the file `name` of the epoch being committed is written before the commit.
-pub(super) fn staged(dir: &Path, name: &str) -> PathBuf {
+fn staged(dir: &Path, name: &str) -> PathBuf {
     dir.join(format!("{name}{STAGED_SUFFIX}"))
 }
 
@@ -85,18 +85,37 @@ pub(super) fn write_state(dir: &Path, state: &TrainState) -> Result<(), TrainErr
     Ok(write_atomically(&path, text.as_bytes())?)
 }
 
-/// Commits `state` together with the files `names`, already written at their [`staged`]
-/// paths, and puts those files in place.
-pub(super) fn commit_epoch(
-    dir: &Path,
-    state: &mut TrainState,
+/// The files one epoch replaces in the run folder: each is written at the path
+/// [`EpochFiles::stage`] gives for it, and [`EpochFiles::commit`] puts them all in place
+/// together with the state.
+pub(super) struct EpochFiles<'a> {
+    dir: &'a Path,
     names: Vec<String>,
-) -> Result<(), TrainError> {
-    state.pending = names;
-    write_state(dir, state)?;
-    promote(dir, &state.pending)?;
-    state.pending.clear();
-    write_state(dir, state)
+}
+
+impl<'a> EpochFiles<'a> {
+    /// No file staged yet, in the run folder `dir`.
+    pub(super) fn new(dir: &'a Path) -> Self {
+        Self {
+            dir,
+            names: Vec::new(),
+        }
+    }
+
+    /// The path to write the epoch's file `name` at until the commit.
+    pub(super) fn stage(&mut self, name: &str) -> PathBuf {
+        self.names.push(name.to_string());
+        staged(self.dir, name)
+    }
+
+    /// Commits `state` together with the staged files, and puts those files in place.
+    pub(super) fn commit(self, state: &mut TrainState) -> Result<(), TrainError> {
+        state.pending = self.names;
+        write_state(self.dir, state)?;
+        promote(self.dir, &state.pending)?;
+        state.pending.clear();
+        write_state(self.dir, state)
+    }
 }
 
 /// Renames the staged files `names` into place; one already renamed is skipped.
@@ -186,8 +205,9 @@ mod tests {
         // A whole commit.
         let mut next = state();
         next.next_epoch = 3;
-        std::fs::write(staged(dir, "last_model.bpk"), b"epoch 3").unwrap();
-        commit_epoch(dir, &mut next, vec!["last_model.bpk".into()]).unwrap();
+        let mut files = EpochFiles::new(dir);
+        std::fs::write(files.stage("last_model.bpk"), b"epoch 3").unwrap();
+        files.commit(&mut next).unwrap();
         assert!(next.pending.is_empty());
         assert_eq!(
             std::fs::read(dir.join("last_model.bpk")).unwrap(),

@@ -35,7 +35,7 @@ use super::model_files::{
     AVERAGE_MODEL, FINAL, LAST_MODEL, LAST_OPTIM, best_file, initial_model, load_model, save_model,
 };
 use super::progress::{StageSummary, TrainEvent, TrainReport};
-use super::run_state::{TrainState, commit_epoch, recover_state, staged, write_state};
+use super::run_state::{EpochFiles, TrainState, recover_state, write_state};
 use super::selection::EpochJudge;
 
 /// Trains a model of `model_config` on the normal cubes `data` through the three stages,
@@ -374,7 +374,7 @@ impl Context<'_> {
         };
         for epoch in state.next_epoch..settings.epochs {
             // The files this epoch replaces, committed with the state at its end.
-            let mut epoch_files = Vec::new();
+            let mut epoch_files = EpochFiles::new(self.out_dir);
             let lr = settings.schedule.rate(settings.lr, epoch);
             let mut order = self.train_idx.to_vec();
             rng.shuffle(&mut order);
@@ -408,8 +408,7 @@ impl Context<'_> {
                         Some(mean) => mean.fold_in(&model)?,
                     };
                     let prepared = self.prepare_average(&folded, averaging, stage);
-                    save_model(&prepared, &staged(self.out_dir, AVERAGE_MODEL))?;
-                    epoch_files.push(AVERAGE_MODEL.to_string());
+                    save_model(&prepared, &epoch_files.stage(AVERAGE_MODEL))?;
                     let count = folded.count();
                     average = Some(folded.with_weights(&prepared));
                     (Some(prepared), count)
@@ -434,16 +433,14 @@ impl Context<'_> {
                 state.best_loss = Some(value);
                 state.best_epoch = epoch;
                 state.best_averaged = averaged;
-                save_model(candidate_model, &staged(self.out_dir, &best_file(stage)))?;
-                epoch_files.push(best_file(stage));
+                save_model(candidate_model, &epoch_files.stage(&best_file(stage)))?;
             }
-            save_model(&model, &staged(self.out_dir, LAST_MODEL))?;
-            write_atomically_with(&staged(self.out_dir, LAST_OPTIM), |scratch| {
+            save_model(&model, &epoch_files.stage(LAST_MODEL))?;
+            write_atomically_with(&epoch_files.stage(LAST_OPTIM), |scratch| {
                 optim
                     .save(scratch)
                     .map_err(|e| TrainError::file(scratch, e))
             })?;
-            epoch_files.extend([LAST_MODEL.to_string(), LAST_OPTIM.to_string()]);
             state.next_epoch = epoch + 1;
             state.averaged = averaged;
             state.rng_state = rng.state();
@@ -461,7 +458,7 @@ impl Context<'_> {
                     .map(|value| -value),
                 last_train_loss: train_loss,
             });
-            commit_epoch(self.out_dir, state, epoch_files)?;
+            epoch_files.commit(state)?;
             on_event(&TrainEvent::EpochDone {
                 stage,
                 epoch,
