@@ -17,7 +17,7 @@ use vadscope::sequence::Scenario;
 
 use crate::support::annotate::{add_interval, write_scenario};
 use crate::support::app::tiny_checkpoint;
-use crate::support::cli::{scenario_folders, text, vadscope};
+use crate::support::cli::{files_under, path, scenario_folders, succeed};
 
 /// Runs the command given to it on the prepared folder, as `run_on` describes.
 const SCRIPT: &str = r#"
@@ -118,10 +118,6 @@ fn run_on(mode: Mode, src: &Path, work: &Path, args: &[&str], env: &[(&str, &Pat
     }
 }
 
-fn path(p: &Path) -> &str {
-    p.to_str().expect("utf-8 temp path")
-}
-
 /// The mode the full-disk tests run in here, said once per test.
 fn full_disk_mode() -> Mode {
     let mode = if namespaces_allowed() {
@@ -155,46 +151,19 @@ fn assert_failed_clearly(outcome: &Outcome, mode: Mode) {
     );
 }
 
-/// Every file under `root`, by relative path, with its bytes (the filler and temporary
-/// files of atomic writes left out).
-fn files(root: &Path) -> Vec<(PathBuf, Vec<u8>)> {
-    let mut found = Vec::new();
-    let mut folders = vec![root.to_path_buf()];
-    while let Some(folder) = folders.pop() {
-        for entry in std::fs::read_dir(&folder).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                folders.push(path);
-            } else {
-                found.push((
-                    path.strip_prefix(root).unwrap().to_path_buf(),
-                    std::fs::read(&path).unwrap(),
-                ));
-            }
-        }
-    }
-    found.sort();
-    found
-}
-
 /// Asserts that the folder after the run holds exactly the files before it, byte for byte:
 /// nothing earlier damaged, no temporary file left behind.
 fn assert_unchanged(before: &Path, outcome: &Outcome) {
-    let (before, after) = (files(before), files(&outcome.snapshot));
-    let names = |f: &[(PathBuf, Vec<u8>)]| f.iter().map(|(p, _)| p.clone()).collect::<Vec<_>>();
-    assert_eq!(names(&after), names(&before), "files appeared or vanished");
-    for ((name, was), (_, is)) in before.iter().zip(&after) {
+    let (before, after) = (files_under(before), files_under(&outcome.snapshot));
+    assert!(
+        after.keys().eq(before.keys()),
+        "files appeared or vanished: {:?} against {:?}",
+        after.keys().collect::<Vec<_>>(),
+        before.keys().collect::<Vec<_>>()
+    );
+    for ((name, was), is) in before.iter().zip(after.values()) {
         assert!(was == is, "{} changed", name.display());
     }
-}
-
-fn succeed(args: &[&str]) {
-    let out = vadscope(args);
-    assert!(
-        out.status.success(),
-        "vadscope {args:?}: {}",
-        text(&out.stderr)
-    );
 }
 
 /// Two scored 12-frame 96×64 scenarios and the tiny model, under `dir/src`.
@@ -381,7 +350,7 @@ fn score_on_a_read_only_data_set_keeps_its_caches_in_the_user_cache_folder() {
     );
     assert!(scored.success, "{}", scored.stderr);
     assert_unchanged(&src, &scored);
-    let caches: Vec<_> = files(&user_cache)
+    let caches: Vec<_> = files_under(&user_cache)
         .into_iter()
         .filter(|(p, _)| p.extension().is_some_and(|x| x == "vsc"))
         .collect();

@@ -21,7 +21,7 @@ use vadscope::sequence::Scenario;
 
 use crate::support::annotate::{add_interval, write_scenario};
 use crate::support::app::tiny_checkpoint;
-use crate::support::cli::{text, vadscope};
+use crate::support::cli::{files_under, path, text, vadscope};
 
 /// Kills that must land on a running process in each test.
 const KILLS: usize = 20;
@@ -155,31 +155,6 @@ fn vadscope_command<S: AsRef<str>>(args: &[S]) -> Command {
     command
 }
 
-/// Every file under `root` (hidden ones included) by its path relative to `root`, with its
-/// bytes; files whose relative path `skip` matches are left out.
-fn files_under(root: &Path, skip: &dyn Fn(&Path) -> bool) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut files = BTreeMap::new();
-    let mut folders = vec![root.to_path_buf()];
-    while let Some(folder) = folders.pop() {
-        let Ok(entries) = std::fs::read_dir(&folder) else {
-            continue;
-        };
-        for entry in entries {
-            let path = entry.expect("folder entry").path();
-            let relative = path.strip_prefix(root).unwrap().to_path_buf();
-            if skip(&relative) {
-                continue;
-            }
-            if path.is_dir() {
-                folders.push(path);
-            } else if let Ok(bytes) = std::fs::read(&path) {
-                files.insert(relative, bytes);
-            }
-        }
-    }
-    files
-}
-
 /// Whether `relative` is a temporary file of an atomic write (`.<name>.<pid>.tmp`) or lies
 /// in a folder being generated (`.<scenario>.partial`): what a killed run may leave.
 fn in_progress(relative: &Path) -> bool {
@@ -219,10 +194,6 @@ fn assert_matches(
     }
 }
 
-fn path(p: &Path) -> &str {
-    p.to_str().expect("utf-8 temp path")
-}
-
 /// The arguments of `generate`: three normal scenarios of `frames` frames of `size`, with
 /// `extra`.
 fn generate_args<'a>(
@@ -239,11 +210,6 @@ fn generate_args<'a>(
     args
 }
 
-/// Files of the folder `root` and everything under it.
-fn everything(root: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    files_under(root, &|_| false)
-}
-
 /// Removes `dir` and what is in it, if it exists.
 fn remove(dir: &Path) {
     if dir.exists() {
@@ -254,7 +220,7 @@ fn remove(dir: &Path) {
 /// Copies the folder `from` to `to`, replacing `to`.
 fn copy_folder(from: &Path, to: &Path) {
     remove(to);
-    for (relative, bytes) in everything(from) {
+    for (relative, bytes) in files_under(from) {
         let target = to.join(relative);
         std::fs::create_dir_all(target.parent().unwrap()).unwrap();
         std::fs::write(target, bytes).unwrap();
@@ -273,13 +239,13 @@ fn kill_on_copies(
     let reference = dir.join("reference");
     copy_folder(data, &reference);
     let window = timed(&command(&reference));
-    let expected = everything(&reference);
+    let expected = files_under(&reference);
     let out = dir.join("out");
     let kills = KillTest {
         seed,
         reset: &mut || copy_folder(data, &out),
         command: &mut || vadscope_command(&command(&out)),
-        check: &mut |finished| assert_matches(&everything(&out), &expected, finished, what),
+        check: &mut |finished| assert_matches(&files_under(&out), &expected, finished, what),
     }
     .run(window, dir);
     assert!(kills >= KILLS);
@@ -291,7 +257,7 @@ fn generate_killed_at_random_moments_resumes_to_the_same_scenarios() {
     let dir = tempfile::tempdir().unwrap();
     let reference = dir.path().join("reference");
     let window = timed(&generate_args(path(&reference), "24", "192x128", &[]));
-    let expected = everything(&reference);
+    let expected = files_under(&reference);
     let out = dir.path().join("out");
     let kills = KillTest {
         seed: 1,
@@ -300,7 +266,7 @@ fn generate_killed_at_random_moments_resumes_to_the_same_scenarios() {
             vadscope_command(&generate_args(path(&out), "24", "192x128", &["--resume"]))
         },
         check: &mut |finished| {
-            assert_matches(&everything(&out), &expected, finished, "generate");
+            assert_matches(&files_under(&out), &expected, finished, "generate");
         },
     }
     .run(window, dir.path());
@@ -317,7 +283,7 @@ fn flow_killed_at_random_moments_finishes_the_same_cache() {
         "192x128",
         &["--omit", "flow,depth,instance"],
     ));
-    let frames = everything(&data);
+    let frames = files_under(&data);
     let flow = |root: &Path| {
         vec![
             "flow".to_string(),
@@ -382,13 +348,13 @@ fn export_killed_at_random_moments_leaves_whole_files_and_finishes_when_rerun() 
     timed(&args);
     remove(&reference);
     let window = timed(&args);
-    let expected = everything(&reference);
+    let expected = files_under(&reference);
     let out = dir.path().join("out");
     let kills = KillTest {
         seed: 4,
         reset: &mut || remove(&out),
         command: &mut || vadscope_command(&export(&out)),
-        check: &mut |finished| assert_matches(&everything(&out), &expected, finished, "export"),
+        check: &mut |finished| assert_matches(&files_under(&out), &expected, finished, "export"),
     }
     .run(window, dir.path());
     assert!(kills >= KILLS);
@@ -432,7 +398,7 @@ fn train_killed_at_random_moments_resumes_to_the_uninterrupted_model() {
                     weights(&out).ok() == Some(expected.clone()),
                     "the resumed run's model differs"
                 );
-                let leftovers: Vec<_> = everything(&out)
+                let leftovers: Vec<_> = files_under(&out)
                     .into_keys()
                     .filter(|p| in_progress(p))
                     .collect();

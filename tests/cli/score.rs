@@ -14,23 +14,12 @@ use vadscope::model::{
 };
 use vadscope::score::ScoreCache;
 
-use crate::support::cli::{text, vadscope};
+use crate::support::cli::{succeed, text, vadscope};
 use crate::support::model::tiny_config;
 
 /// Frames per generated scenario: the generator's shortest braking scenario (the lead
 /// vehicle brakes to a standstill inside it, so it has anomalous frames).
 const FRAMES: usize = 80;
-
-/// Runs vadscope and insists that it succeeds; returns standard output.
-fn succeed(args: &[&str]) -> String {
-    let out = vadscope(args);
-    assert!(
-        out.status.success(),
-        "vadscope {args:?} failed:\n{}",
-        text(&out.stderr)
-    );
-    text(&out.stdout)
-}
 
 /// Runs vadscope and insists that it fails; returns standard error.
 fn fail(args: &[&str]) -> String {

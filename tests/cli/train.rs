@@ -14,12 +14,8 @@ use vadscope::model::{Detector, FlowUnits, ModelConfig, ScoreScale, load_checkpo
 use vadscope::train::CubeSet;
 
 use crate::support::app::generate_dataset;
-use crate::support::cli::{text, vadscope};
+use crate::support::cli::{path, text, vadscope};
 use crate::support::model::tiny_config;
-
-pub(crate) fn path(p: &Path) -> &str {
-    p.to_str().expect("utf-8 temp path")
-}
 
 /// Two 10-frame 96×64 normal-driving scenarios in `dir`, with `extra` generator options.
 pub(crate) fn generate(dir: &Path, extra: &[&str]) {

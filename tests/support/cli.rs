@@ -1,6 +1,7 @@
 //! Shared by the end-to-end tests of the `vadscope` binary: running it and generating small
 //! scenarios to run it on.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -34,6 +35,43 @@ pub fn tiny_generate_args<'a>(out: &'a str, seed: &'a str) -> [&'a str; 15] {
         "--seed",
         seed,
     ]
+}
+
+/// Runs the binary like [`vadscope`] and insists that it succeeds; returns standard output.
+pub fn succeed(args: &[&str]) -> String {
+    let out = vadscope(args);
+    assert!(
+        out.status.success(),
+        "vadscope {args:?} failed:\n{}",
+        text(&out.stderr)
+    );
+    text(&out.stdout)
+}
+
+/// A temp path as the `&str` a command line takes.
+pub fn path(p: &Path) -> &str {
+    p.to_str().expect("utf-8 temp path")
+}
+
+/// Every file under `root` (hidden ones included) by its path relative to `root`, with its
+/// bytes; nothing for a folder that does not exist.
+pub fn files_under(root: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let mut files = BTreeMap::new();
+    let mut folders = vec![root.to_path_buf()];
+    while let Some(folder) = folders.pop() {
+        let Ok(entries) = std::fs::read_dir(&folder) else {
+            continue;
+        };
+        for entry in entries {
+            let path = entry.expect("folder entry").path();
+            if path.is_dir() {
+                folders.push(path);
+            } else if let Ok(bytes) = std::fs::read(&path) {
+                files.insert(path.strip_prefix(root).unwrap().to_path_buf(), bytes);
+            }
+        }
+    }
+    files
 }
 
 /// Process output as text, for messages and `contains` checks.
