@@ -172,8 +172,9 @@ pub fn remove_stale_temporaries(folder: &Path) {
     }
 }
 
-/// `.<name>.<pid>.tmp` beside `target`.
-fn temporary_path(target: &Path) -> PathBuf {
+/// `.<name>.<pid>.tmp` beside `target`: the name [`remove_stale_temporaries`] clears once
+/// the process that made it has died.
+pub fn temporary_path(target: &Path) -> PathBuf {
     let name = target
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())

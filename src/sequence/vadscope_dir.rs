@@ -52,9 +52,32 @@ fn is_writable_dir(dir: &Path) -> bool {
     if std::fs::create_dir_all(dir).is_err() {
         return false;
     }
-    let probe = dir.join(format!(".write-probe-{}", std::process::id()));
+    // The probe carries a temporary file's name, so one stranded by a kill between its
+    // creation and removal is cleared here by the next run.
+    crate::atomic_file::remove_stale_temporaries(dir);
+    let probe = crate::atomic_file::temporary_path(&dir.join("write-probe"));
     let writable = std::fs::write(&probe, b"").is_ok();
     // The probe is only a test; failing to remove it leaves an empty hidden file behind.
     let _ = std::fs::remove_file(&probe);
     writable
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_probe_stranded_by_a_killed_process_is_cleared_and_none_is_left() {
+        let scenario = tempfile::tempdir().unwrap();
+        let inside = scenario.path().join(VADSCOPE_FOLDER);
+        std::fs::create_dir_all(&inside).unwrap();
+        // No process has this id (above Linux's largest pid), as after a kill.
+        let stranded = inside.join(".write-probe.4294967.tmp");
+        std::fs::write(&stranded, b"").unwrap();
+        let base = tempfile::tempdir().unwrap();
+        let resolved = resolve_cache_dir(scenario.path(), base.path()).unwrap();
+        assert_eq!(resolved, inside);
+        let left: Vec<_> = std::fs::read_dir(&inside).unwrap().collect();
+        assert!(left.is_empty(), "files left in .vadscope: {left:?}");
+    }
 }
