@@ -16,7 +16,7 @@ use burn::optim::{AdamConfig, GradientsParams};
 use burn::tensor::{Device, Tensor, TensorData};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
-use vadscope::model::gemm_conv::training::with_burn_convolutions;
+use vadscope::model::gemm_conv::training::with_burn_layers;
 use vadscope::model::losses::{LossWeights, stage1_loss, stage2_loss, stage3_loss};
 use vadscope::model::{CheckpointMeta, Detector, Hf2Vad, Latents, ModelConfig, NoiseRng};
 
@@ -147,7 +147,7 @@ fn training(c: &mut Criterion) {
                 let id = BenchmarkId::new(format!("stage{stage}/{path}"), batch);
                 group.bench_function(id, |b| {
                     b.iter(|| match path {
-                        "burn_conv" => with_burn_convolutions(&mut step),
+                        "burn_conv" => with_burn_layers(&mut step),
                         _ => step(),
                     })
                 });

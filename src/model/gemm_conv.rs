@@ -14,10 +14,11 @@
 //!
 //! Files: the layers here; their shared kernels (tiling, unfolding, write-back, GEMM
 //! wrappers) in `kernels`; 3×3 Winograd in `winograd`; the training path's autodiff ops in
-//! [`training`]; the memory modules' addressing product Q·Mᵀ in [`memory_scores`] (asked
+//! [`training`] (training-mode BatchNorm with its ReLU in `batch_norm`); the memory modules' addressing product Q·Mᵀ in [`memory_scores`] (asked
 //! for in the orientation burn asks for it, gemm copies the whole memory matrix on every
 //! read).
 
+mod batch_norm;
 mod kernels;
 mod memory_scores;
 pub mod training;

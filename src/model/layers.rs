@@ -7,7 +7,7 @@ use burn::module::{Flag, Module, Param, RunningState};
 use burn::nn::Initializer;
 use burn::nn::PaddingConfig2d;
 use burn::nn::conv::{Conv2d, Conv2dConfig, ConvTranspose2d, ConvTranspose2dConfig};
-use burn::tensor::activation::elu;
+use burn::tensor::activation::{elu, relu};
 use burn::tensor::module::batch_norm_train;
 use burn::tensor::{Device, Tensor, TensorData};
 
@@ -94,11 +94,32 @@ impl BatchNorm2d {
         }
     }
 
+    /// max(BatchNorm(`x`), 0): in training, one fused node of the autodiff graph
+    /// ([`training::batch_norm_relu`]); else the normalisation by the running statistics,
+    /// then the ReLU.
+    pub fn forward_relu(&self, x: Tensor<4>) -> Tensor<4> {
+        if x.device().is_autodiff() && self.training.is_enabled() {
+            let count = batch_values_per_channel(&x);
+            let out = training::batch_norm_relu(x, self.weight.val(), self.bias.val(), self.eps);
+            self.update_running(out.mean, out.variance, count);
+            out.output
+        } else {
+            relu(self.forward(x))
+        }
+    }
+
     fn forward_train(&self, x: Tensor<4>) -> Tensor<4> {
-        let [b, _, h, w] = x.dims();
-        let count = (b * h * w) as f64;
-        let device = x.device();
+        let count = batch_values_per_channel(&x);
         let out = batch_norm_train(x, self.weight.val(), self.bias.val(), self.eps);
+        self.update_running(out.mean.detach(), out.variance.detach(), count);
+        out.output
+    }
+
+    /// Folds a batch's `mean` and biased `variance` of `count` values per channel into the
+    /// running statistics, as PyTorch does.
+    fn update_running(&self, mean: Tensor<1>, variance: Tensor<1>, count: usize) {
+        let device = mean.device();
+        let count = count as f64;
         // PyTorch raises for a single value per channel; keeping the biased value there
         // avoids an infinite running variance instead.
         let bessel = if count > 1.0 {
@@ -107,18 +128,21 @@ impl BatchNorm2d {
             1.0
         };
         let m = self.momentum;
-        let mean = self.running_mean.value_sync().to_device(&device);
-        let var = self.running_var.value_sync().to_device(&device);
-        let mean = mean
+        let running_mean = self.running_mean.value_sync().to_device(&device);
+        let running_var = self.running_var.value_sync().to_device(&device);
+        let running_mean = running_mean.mul_scalar(1.0 - m).add(mean.mul_scalar(m));
+        let running_var = running_var
             .mul_scalar(1.0 - m)
-            .add(out.mean.detach().mul_scalar(m));
-        let var = var
-            .mul_scalar(1.0 - m)
-            .add(out.variance.detach().mul_scalar(m * bessel));
-        self.running_mean.update(mean.detach());
-        self.running_var.update(var.detach());
-        out.output
+            .add(variance.mul_scalar(m * bessel));
+        self.running_mean.update(running_mean.detach());
+        self.running_var.update(running_var.detach());
     }
+}
+
+/// B·H·W: the values each channel of `x` [B, C, H, W] has in a batch.
+fn batch_values_per_channel(x: &Tensor<4>) -> usize {
+    let [b, _, h, w] = x.dims();
+    b * h * w
 }
 
 /// A 2D convolution with bias, initialised as the reference's ML-MemAE-SC convs:
@@ -480,6 +504,37 @@ mod tests {
 
     fn values(t: Tensor<4>) -> Vec<f32> {
         t.into_data().try_to_vec::<f32>().expect("f32 tensor")
+    }
+
+    #[test]
+    fn fused_training_batch_norm_updates_the_running_statistics_as_burns_path() {
+        let device = Device::flex().autodiff();
+        let mut rng = NoiseRng::new(3);
+        let x = tensor(
+            rng.normal_vec(4 * 3 * 5 * 5, 2.0, 3.0),
+            [4, 3, 5, 5],
+            &device,
+        );
+        let fused = BatchNorm2d::new(3, &device, &mut NoiseRng::new(4));
+        let reference = BatchNorm2d::new(3, &device, &mut NoiseRng::new(4));
+        let out = fused.forward_relu(x.clone());
+        let expected = training::with_burn_layers(|| relu(reference.forward(x)));
+        let close = |a: Vec<f32>, b: Vec<f32>| a.iter().zip(&b).all(|(a, b)| (a - b).abs() < 1e-5);
+        assert!(close(values(out.inner()), values(expected.inner())));
+        let stats = |bn: &BatchNorm2d| {
+            let read = |t: Tensor<1>| t.into_data().try_to_vec::<f32>().expect("f32");
+            [
+                read(bn.running_mean.value_sync()),
+                read(bn.running_var.value_sync()),
+            ]
+        };
+        let [mean, var] = stats(&fused);
+        let [expected_mean, expected_var] = stats(&reference);
+        assert!(close(mean.clone(), expected_mean), "running mean");
+        assert!(close(var.clone(), expected_var), "running variance");
+        // Moved from (0, 1) by momentum 0.1 towards (2, 9·100/99).
+        assert!(mean.iter().all(|m| (m - 0.2).abs() < 0.1), "{mean:?}");
+        assert!(var.iter().all(|v| (v - 1.8).abs() < 0.3), "{var:?}");
     }
 
     #[test]

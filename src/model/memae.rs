@@ -56,8 +56,8 @@ impl DoubleConv {
         {
             return second.forward(first.forward(x));
         }
-        let x = relu(self.bn1.forward(conv_forward(&self.conv1, x)));
-        relu(self.bn2.forward(conv_forward(&self.conv2, x)))
+        let x = self.bn1.forward_relu(conv_forward(&self.conv1, x));
+        self.bn2.forward_relu(conv_forward(&self.conv2, x))
     }
 }
 

@@ -20,8 +20,10 @@
 //! layer at a time, which is exactly one node of the graph, and everything else (BatchNorm,
 //! weight normalisation, losses) keeps burn's exact gradients.
 //!
-//! [`with_burn_convolutions`] runs a closure with burn's own convolutions instead, so the two
-//! paths can be compared side by side (tests, the training benchmark).
+//! Training-mode BatchNorm with the ReLU after it is one such node too
+//! ([`batch_norm_relu`], in `batch_norm`). [`with_burn_layers`] runs a closure with burn's
+//! own convolutions, BatchNorm and ReLU instead, so the two paths can be compared side by
+//! side (tests, the training benchmark).
 
 use std::cell::Cell;
 
@@ -36,6 +38,7 @@ use burn::tensor::{Tensor, TensorData};
 use burn_flex::FlexTensor;
 use rayon::prelude::*;
 
+pub use super::batch_norm::{BatchNormReluOutput, batch_norm_relu};
 use super::kernels::{
     channels_first, im2col, matmul_accumulate_transposed, samples_per_tile, vectorised,
     with_scratch,
@@ -46,28 +49,30 @@ use super::{Activation, ConvGeometry, CpuValues, GemmConv2d, GemmConvTranspose2d
 /// gradient checkpointing) holds its tensors.
 ///
 /// [`Device::autodiff`]: burn::tensor::Device::autodiff
-type Trained = Autodiff<Flex, NoCheckpointing>;
+pub(super) type Trained = Autodiff<Flex, NoCheckpointing>;
 
 thread_local! {
-    /// Set while [`with_burn_convolutions`] runs on this thread.
-    static BURN_CONVOLUTIONS: Cell<bool> = const { Cell::new(false) };
+    /// Set while [`with_burn_layers`] runs on this thread.
+    static BURN_LAYERS: Cell<bool> = const { Cell::new(false) };
 }
 
-/// Runs `f` with burn's own convolutions in place of the lowered ones on this thread: the
-/// reference the lowered training path is measured and tested against.
-pub fn with_burn_convolutions<R>(f: impl FnOnce() -> R) -> R {
+/// Runs `f` with burn's own convolutions, BatchNorm and ReLU in place of the lowered and
+/// fused ones on this thread: the reference the training path is measured and tested
+/// against.
+pub fn with_burn_layers<R>(f: impl FnOnce() -> R) -> R {
     struct Restore(bool);
     impl Drop for Restore {
         fn drop(&mut self) {
-            BURN_CONVOLUTIONS.with(|flag| flag.set(self.0));
+            BURN_LAYERS.with(|flag| flag.set(self.0));
         }
     }
-    let _restore = Restore(BURN_CONVOLUTIONS.with(|flag| flag.replace(true)));
+    let _restore = Restore(BURN_LAYERS.with(|flag| flag.replace(true)));
     f()
 }
 
-fn burn_convolutions() -> bool {
-    BURN_CONVOLUTIONS.with(Cell::get)
+/// Whether [`with_burn_layers`] runs on this thread.
+pub(super) fn burn_layers() -> bool {
+    BURN_LAYERS.with(Cell::get)
 }
 
 /// Which of the two layers a node is, with what it needs beyond its tensors.
@@ -96,7 +101,7 @@ impl Layer {
         }
     }
 
-    /// burn's own differentiable layer, for [`with_burn_convolutions`].
+    /// burn's own differentiable layer, for [`with_burn_layers`].
     fn burn_forward(self, x: Tensor<4>, weight: Tensor<4>, bias: Tensor<1>) -> Tensor<4> {
         let g = self.geometry();
         match self {
@@ -171,10 +176,10 @@ pub fn conv_transpose2d(
     apply(Layer::Transposed(geometry, out_padding), x, weight, bias)
 }
 
-/// `layer` on `x`: burn's own op inside [`with_burn_convolutions`], the plain lowering off
+/// `layer` on `x`: burn's own op inside [`with_burn_layers`], the plain lowering off
 /// the autodiff device, else the lowering registered as a node of the autodiff graph.
 fn apply(layer: Layer, x: Tensor<4>, weight: Tensor<4>, bias: Tensor<1>) -> Tensor<4> {
-    if burn_convolutions() {
+    if burn_layers() {
         return layer.burn_forward(x, weight, bias);
     }
     if !x.device().is_autodiff() {
@@ -200,7 +205,7 @@ fn apply(layer: Layer, x: Tensor<4>, weight: Tensor<4>, bias: Tensor<1>) -> Tens
 }
 
 /// `t`'s autodiff primitive on the training device.
-fn autodiff_primitive<const D: usize>(
+pub(super) fn autodiff_primitive<const D: usize>(
     t: Tensor<D>,
 ) -> <Trained as BackendTypes>::FloatTensorPrimitive {
     t.try_into_primitive::<Trained>()
@@ -208,7 +213,7 @@ fn autodiff_primitive<const D: usize>(
 }
 
 /// A plain CPU tensor over `t`'s values (no copy).
-fn plain<const D: usize>(t: FlexTensor) -> Tensor<D> {
+pub(super) fn plain<const D: usize>(t: FlexTensor) -> Tensor<D> {
     Tensor::from_primitive::<Flex>(t)
 }
 
@@ -355,20 +360,27 @@ fn weight_gradient(left: &Tensor<4>, right: &Tensor<4>, g: ConvGeometry) -> Vec<
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use burn::tensor::Device;
 
     use super::*;
     use crate::model::rng::NoiseRng;
 
-    fn random<const D: usize>(rng: &mut NoiseRng, shape: [usize; D]) -> Tensor<D> {
+    /// A tensor of standard normal values with `shape` on the autodiff CPU device.
+    pub(in crate::model::gemm_conv) fn random<const D: usize>(
+        rng: &mut NoiseRng,
+        shape: [usize; D],
+    ) -> Tensor<D> {
         let n = shape.iter().product();
         let device = Device::flex().autodiff();
         Tensor::from_data(TensorData::new(rng.normal_vec(n, 0.0, 1.0), shape), &device)
     }
 
     /// Largest absolute difference over the largest magnitude of `reference`.
-    fn relative_error<const D: usize>(ours: &Tensor<D>, reference: &Tensor<D>) -> f32 {
+    pub(in crate::model::gemm_conv) fn relative_error<const D: usize>(
+        ours: &Tensor<D>,
+        reference: &Tensor<D>,
+    ) -> f32 {
         assert_eq!(ours.dims(), reference.dims());
         let scale = reference.clone().abs().max().into_scalar::<f32>();
         let diff = (ours.clone() - reference.clone())
@@ -417,7 +429,7 @@ mod tests {
             .dims();
         let r = random(&mut rng, shape);
         let ours = output_and_gradients(layer, &x, &weight, &bias, &r);
-        let burn = with_burn_convolutions(|| output_and_gradients(layer, &x, &weight, &bias, &r));
+        let burn = with_burn_layers(|| output_and_gradients(layer, &x, &weight, &bias, &r));
         for (name, error) in [
             ("output", relative_error(&ours.0, &burn.0)),
             ("input gradient", relative_error(&ours.1, &burn.1)),
