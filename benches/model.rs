@@ -5,8 +5,9 @@
 //! Threads: burn's CPU backend uses the rayon pool, so run once per thread count:
 //! `RAYON_NUM_THREADS=1 cargo bench --bench model` and `RAYON_NUM_THREADS=2 …`.
 //! `VADSCOPE_BENCH=infer` or `=train` restricts the run to one part; `VADSCOPE_PRESETS=compact`
-//! to one preset. Training steps run through the lowered convolutions and, side by side,
-//! through burn's own (`stage1/burn_conv`); `VADSCOPE_TRAIN_PATHS=lowered` keeps one. The
+//! to one preset. Training steps run through the lowered convolutions and the fused
+//! BatchNorm and, side by side, through burn's own layers (`stage1/burn_layers`);
+//! `VADSCOPE_TRAIN_PATHS=lowered` keeps one. The
 //! PyTorch reference figures to compare with are in `shared/design/pytorch-cpu-anchor.md`.
 
 use std::time::Duration;
@@ -32,13 +33,14 @@ fn presets() -> Vec<ModelConfig> {
         .collect()
 }
 
-/// The training paths to measure: the lowered convolutions (`lowered`, what training uses)
-/// and burn's own (`burn_conv`, the reference they replace), side by side;
-/// `VADSCOPE_TRAIN_PATHS=lowered` restricts the run to one.
+/// The training paths to measure: the lowered convolutions and fused BatchNorm (`lowered`,
+/// what training uses) and burn's own convolutions, BatchNorm and ReLU (`burn_layers`, the
+/// reference they replace), side by side; `VADSCOPE_TRAIN_PATHS=lowered` restricts the run
+/// to one.
 fn training_paths() -> Vec<&'static str> {
     let wanted =
-        std::env::var("VADSCOPE_TRAIN_PATHS").unwrap_or_else(|_| "lowered,burn_conv".into());
-    ["lowered", "burn_conv"]
+        std::env::var("VADSCOPE_TRAIN_PATHS").unwrap_or_else(|_| "lowered,burn_layers".into());
+    ["lowered", "burn_layers"]
         .into_iter()
         .filter(|path| wanted.split(',').any(|w| w.trim() == *path))
         .collect()
@@ -147,7 +149,7 @@ fn training(c: &mut Criterion) {
                 let id = BenchmarkId::new(format!("stage{stage}/{path}"), batch);
                 group.bench_function(id, |b| {
                     b.iter(|| match path {
-                        "burn_conv" => with_burn_layers(&mut step),
+                        "burn_layers" => with_burn_layers(&mut step),
                         _ => step(),
                     })
                 });
