@@ -14,11 +14,13 @@
 //!
 //! Files: the layers here; their shared kernels (tiling, unfolding, write-back, GEMM
 //! wrappers) in `kernels`; 3×3 Winograd in `winograd`; the training path's autodiff ops in
-//! [`training`] (training-mode BatchNorm with its ReLU in `batch_norm`); the memory modules' addressing product Q·Mᵀ in [`memory_scores`] (asked
+//! [`training`] (training-mode BatchNorm with its ReLU in `batch_norm`, ELU with its
+//! dropout in `elu`); the memory modules' addressing product Q·Mᵀ in [`memory_scores`] (asked
 //! for in the orientation burn asks for it, gemm copies the whole memory matrix on every
 //! read).
 
 mod batch_norm;
+mod elu;
 mod kernels;
 mod memory_scores;
 pub mod training;

@@ -7,7 +7,7 @@ use burn::module::{Flag, Module, Param, RunningState};
 use burn::nn::Initializer;
 use burn::nn::PaddingConfig2d;
 use burn::nn::conv::{Conv2d, Conv2dConfig, ConvTranspose2d, ConvTranspose2dConfig};
-use burn::tensor::activation::{elu, relu};
+use burn::tensor::activation::relu;
 use burn::tensor::module::batch_norm_train;
 use burn::tensor::{Device, Tensor, TensorData};
 
@@ -330,18 +330,15 @@ impl NormConv2d {
     }
 }
 
-/// Inverted dropout with a mask from `noise`; the identity when `noise` is `None` (eval) or
-/// `prob` is 0.
-pub(crate) fn dropout(x: Tensor<4>, prob: f64, noise: Option<&mut NoiseRng>) -> Tensor<4> {
-    match noise {
-        Some(rng) if prob > 0.0 => {
-            let dims = x.dims();
-            let n = dims.iter().product();
-            let mask = tensor(rng.dropout_mask(n, prob), dims, &x.device());
-            x * mask
-        }
-        _ => x,
-    }
+/// ELU (α = 1) of `x`, then inverted dropout with a mask from `noise` (the dropout is the
+/// identity when `noise` is `None`, in eval, or `prob` is 0): one fused node in training
+/// ([`training::elu_masked`]).
+fn elu_dropout(x: Tensor<4>, prob: f64, noise: Option<&mut NoiseRng>) -> Tensor<4> {
+    let mask = match noise {
+        Some(rng) if prob > 0.0 => Some(rng.dropout_mask(x.dims().iter().product(), prob)),
+        _ => None,
+    };
+    training::elu_masked(x, mask)
 }
 
 /// VUNet residual block without skip input: `x + conv3×3(dropout(elu(x)))`.
@@ -375,7 +372,7 @@ impl ResBlock {
         if let Some(conv) = self.conv2d.lowered_for(&x, noise.is_some(), self.dropout) {
             return conv.forward_fused(vec![x], Activation::Elu, true);
         }
-        let h = dropout(elu(x.clone(), 1.0), self.dropout, noise);
+        let h = elu_dropout(x.clone(), self.dropout, noise);
         x + self.conv2d.forward(h)
     }
 }
@@ -420,9 +417,9 @@ impl SkipResBlock {
             let a = pre.forward_fused(vec![a], Activation::Elu, false);
             return conv.forward_fused(vec![x, a], Activation::Elu, true);
         }
-        let a = self.pre.forward(elu(a, 1.0));
+        let a = self.pre.forward(training::elu_masked(a, None));
         let h = Tensor::cat(vec![x.clone(), a], 1);
-        let h = dropout(elu(h, 1.0), self.dropout, noise);
+        let h = elu_dropout(h, self.dropout, noise);
         x + self.conv2d.forward(h)
     }
 }

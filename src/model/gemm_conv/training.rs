@@ -21,9 +21,10 @@
 //! weight normalisation, losses) keeps burn's exact gradients.
 //!
 //! Training-mode BatchNorm with the ReLU after it is one such node too
-//! ([`batch_norm_relu`], in `batch_norm`). [`with_burn_layers`] runs a closure with burn's
-//! own convolutions, BatchNorm and ReLU instead, so the two paths can be compared side by
-//! side (tests, the training benchmark).
+//! ([`batch_norm_relu`], in `batch_norm`), and so is ELU with the dropout after it
+//! ([`elu_masked`], in `elu`). [`with_burn_layers`] runs a closure with burn's own
+//! convolutions, BatchNorm and activations instead, so the two paths can be compared side
+//! by side (tests, the training benchmark).
 
 use std::cell::Cell;
 
@@ -39,6 +40,7 @@ use burn_flex::FlexTensor;
 use rayon::prelude::*;
 
 pub use super::batch_norm::{BatchNormReluOutput, batch_norm_relu};
+pub use super::elu::elu_masked;
 use super::kernels::{
     channels_first, im2col, matmul_accumulate_transposed, samples_per_tile, vectorised,
     with_scratch,
@@ -56,8 +58,8 @@ thread_local! {
     static BURN_LAYERS: Cell<bool> = const { Cell::new(false) };
 }
 
-/// Runs `f` with burn's own convolutions, BatchNorm and ReLU in place of the lowered and
-/// fused ones on this thread: the reference the training path is measured and tested
+/// Runs `f` with burn's own convolutions, BatchNorm, ReLU and ELU in place of the lowered
+/// and fused ones on this thread: the reference the training path is measured and tested
 /// against.
 pub fn with_burn_layers<R>(f: impl FnOnce() -> R) -> R {
     struct Restore(bool);
