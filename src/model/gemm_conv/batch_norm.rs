@@ -122,10 +122,10 @@ impl ChannelStatistics {
             .into_par_iter()
             .map(|ch| {
                 let planes = || (0..b).map(move |s| &x[(s * c + ch) * area..][..area]);
-                let mean = planes().map(|p| lane_sum(p, |v| v)).sum::<f64>() / n;
+                let mean = planes().map(|p| lane_sums(p, p, |v, _| v)).sum::<f64>() / n;
                 let m = mean as f32;
                 let variance = planes()
-                    .map(|p| lane_sum(p, |v| (v - m) * (v - m)))
+                    .map(|p| lane_sums(p, p, |v, _| (v - m) * (v - m)))
                     .sum::<f64>()
                     / n;
                 (m, variance as f32)
@@ -184,20 +184,13 @@ impl ChannelStatistics {
             .map(|ch| {
                 let (scale, shift) = (self.scale[ch], self.shift[ch]);
                 let (mean, inv_std) = (self.mean[ch], self.inv_std[ch]);
-                let mut sum = 0.0f64;
-                let mut dot = 0.0f64;
+                let masked = move |v: f32, g: f32| if v * scale + shift > 0.0 { g } else { 0.0 };
+                let (mut sum, mut dot) = (0.0f64, 0.0f64);
                 for s in 0..b {
                     let at = (s * c + ch) * area;
                     let (x, g) = (&x[at..][..area], &grad[at..][..area]);
-                    let masked = |i: usize| {
-                        if x[i] * scale + shift > 0.0 {
-                            g[i]
-                        } else {
-                            0.0
-                        }
-                    };
-                    sum += lane_sum_indexed(area, masked);
-                    dot += lane_sum_indexed(area, |i| masked(i) * (x[i] - mean) * inv_std);
+                    sum += lane_sums(x, g, masked);
+                    dot += lane_sums(x, g, |v, g| masked(v, g) * (v - mean) * inv_std);
                 }
                 (sum as f32, dot as f32)
             })
@@ -240,24 +233,28 @@ struct Gradient {
 /// vectorises without reassociating (and so without depending on the instruction set).
 const LANES: usize = 8;
 
-/// Σ f(v) over `plane`, in [`LANES`] partial sums.
+/// Σ f(aᵢ, bᵢ) over two planes of the same length, in [`LANES`] partial sums.
 #[inline(always)]
-fn lane_sum(plane: &[f32], f: impl Fn(f32) -> f32) -> f64 {
-    lane_sum_indexed(plane.len(), |i| f(plane[i]))
-}
-
-/// Σ f(i) for i < `len`, in [`LANES`] partial sums.
-#[inline(always)]
-fn lane_sum_indexed(len: usize, f: impl Fn(usize) -> f32) -> f64 {
-    let mut lanes = [0.0f32; LANES];
-    let whole = len - len % LANES;
-    for start in (0..whole).step_by(LANES) {
-        for (lane, sum) in lanes.iter_mut().enumerate() {
-            *sum += f(start + lane);
-        }
-    }
-    let tail: f64 = (whole..len).map(|i| f64::from(f(i))).sum();
-    lanes.iter().map(|&s| f64::from(s)).sum::<f64>() + tail
+fn lane_sums(a: &[f32], b: &[f32], f: impl Fn(f32, f32) -> f32 + Copy) -> f64 {
+    vectorised(
+        #[inline(always)]
+        || {
+            let mut lanes = [0.0f32; LANES];
+            let (a_lanes, b_lanes) = (a.chunks_exact(LANES), b.chunks_exact(LANES));
+            let tail: f64 = a_lanes
+                .remainder()
+                .iter()
+                .zip(b_lanes.remainder())
+                .map(|(&a, &b)| f64::from(f(a, b)))
+                .sum();
+            for (a, b) in a_lanes.zip(b_lanes) {
+                for ((sum, &a), &b) in lanes.iter_mut().zip(a).zip(b) {
+                    *sum += f(a, b);
+                }
+            }
+            lanes.iter().map(|&s| f64::from(s)).sum::<f64>() + tail
+        },
+    )
 }
 
 /// The backward step of [`batch_norm_relu`].
