@@ -45,6 +45,9 @@ pub struct BatchNormReluOutput {
 /// max(γ·(x − μ)/√(σ² + ε) + β, 0) of `x` [B, C, H, W] with its batch statistics μ, σ²: one
 /// differentiable node on burn's autodiff CPU device, burn's `batch_norm_train` and `relu`
 /// inside [`with_burn_layers`](super::training::with_burn_layers).
+///
+/// Training mode only: the tensors must live on the autodiff CPU device (it panics
+/// elsewhere); `BatchNorm2d::forward_relu` routes evaluation to the running statistics.
 pub fn batch_norm_relu(
     x: Tensor<4>,
     gamma: Tensor<1>,
