@@ -109,8 +109,6 @@ struct ChannelStatistics {
     variance: Vec<f32>,
     /// 1/√(σ² + ε).
     inv_std: Vec<f32>,
-    /// γ per channel.
-    gamma: Vec<f32>,
     /// γ/√(σ² + ε): y = max(x·scale + shift, 0).
     scale: Vec<f32>,
     /// β − μ·scale.
@@ -150,7 +148,6 @@ impl ChannelStatistics {
             mean,
             variance,
             inv_std,
-            gamma: gamma.to_vec(),
             scale,
             shift,
         }
@@ -208,7 +205,6 @@ impl ChannelStatistics {
                 let ch = plane % c;
                 let (scale, shift) = (self.scale[ch], self.shift[ch]);
                 let (mean, inv_std) = (self.mean[ch], self.inv_std[ch]);
-                let factor = self.gamma[ch] * inv_std;
                 let (mean_grad, mean_dot) = (beta[ch] / n, gamma[ch] / n);
                 vectorised(
                     #[inline(always)]
@@ -216,7 +212,7 @@ impl ChannelStatistics {
                         for ((d, &v), &gv) in dx.iter_mut().zip(x).zip(g) {
                             let masked = if v * scale + shift > 0.0 { gv } else { 0.0 };
                             let normalised = (v - mean) * inv_std;
-                            *d = factor * (masked - mean_grad - normalised * mean_dot);
+                            *d = scale * (masked - mean_grad - normalised * mean_dot);
                         }
                     },
                 );

@@ -15,10 +15,10 @@
 //! - the bias gradient is the output gradient summed per channel.
 //!
 //! The operations register with burn's autodiff graph ([`Backward`]), so burn's optimiser,
-//! records and checkpoints stay as they are; only the convolution nodes change. Why custom
-//! operations rather than a backend decorator: the lowering needs whole-batch tensors of one
-//! layer at a time, which is exactly one node of the graph, and everything else (BatchNorm,
-//! weight normalisation, losses) keeps burn's exact gradients.
+//! records and checkpoints stay as they are; only these nodes change. Why custom operations
+//! rather than a backend decorator: the lowering needs whole-batch tensors of one layer at a
+//! time, which is exactly one node of the graph, and everything else (weight normalisation,
+//! the memories, losses) keeps burn's exact gradients.
 //!
 //! Training-mode BatchNorm with the ReLU after it is one such node too
 //! ([`batch_norm_relu`], in `batch_norm`), and so is ELU with the dropout after it

@@ -229,13 +229,20 @@ fn lowered_and_fused_layers_train_the_same_loss_curve_as_burns() {
         .expect("training");
         epoch_losses(&events)
     };
-    let dirs: Vec<_> = (0..6).map(|_| tempfile::tempdir().expect("dir")).collect();
-    let mut init: Option<std::path::PathBuf> = None;
+    // The folder of burn's path's run of the stage before, whose model the next stage starts
+    // from.
+    let mut previous: Option<tempfile::TempDir> = None;
     for stage in 1..=3 {
         let config = only(stage);
-        let (ours_dir, burn_dir) = (dirs[2 * stage - 2].path(), dirs[2 * stage - 1].path());
-        let ours = run(&config, init.as_deref(), ours_dir);
-        let burn = with_burn_layers(|| run(&config, init.as_deref(), burn_dir));
+        let init = previous
+            .as_ref()
+            .map(|dir| dir.path().join("model.safetensors"));
+        let (ours_dir, burn_dir) = (
+            tempfile::tempdir().expect("dir"),
+            tempfile::tempdir().expect("dir"),
+        );
+        let ours = run(&config, init.as_deref(), ours_dir.path());
+        let burn = with_burn_layers(|| run(&config, init.as_deref(), burn_dir.path()));
         // Two epochs of three steps.
         assert_eq!(ours.iter().map(|l| l.0).collect::<Vec<_>>(), [stage; 2]);
         for ((_, train, val), (_, burn_train, burn_val)) in ours.iter().zip(&burn) {
@@ -247,7 +254,7 @@ fn lowered_and_fused_layers_train_the_same_loss_curve_as_burns() {
                 );
             }
         }
-        init = Some(burn_dir.join("model.safetensors"));
+        previous = Some(burn_dir);
     }
 }
 
